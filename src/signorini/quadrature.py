@@ -1,0 +1,46 @@
+"""Triangle and boundary quadrature rules.
+
+``dunavant8``: the 16-point degree-8 rule that scikit-fem returns for
+``intorder=8`` (the default).  ``stroud4``: the 16-point conical product of
+4-point Gauss–Jacobi(α=1) × 4-point Gauss–Legendre rules (degree 7) that Matlab's
+``triquad(4, v)`` builds; it collapses one vertex of the triangle, selected by
+``collapse`` ∈ {"right", "acute1", "acute2"} (the right-angle vertex or one of the two 45° vertices
+of a Friedrichs–Keller triangle, in counter-clockwise order after the right angle).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.special import roots_jacobi, roots_legendre
+from skfem.quadrature import get_quadrature
+from skfem.refdom import RefTri
+
+TRIANGLE_RULES = ("dunavant8", "stroud4_right", "stroud4_acute1", "stroud4_acute2")
+
+
+def dunavant8() -> tuple[np.ndarray, np.ndarray]:
+    """Reference points (2, 16) and weights (16,) (summing to 1/2) of scikit-fem's intorder=8 rule."""
+    X, W = get_quadrature(RefTri, 8)
+    return X, W
+
+
+def stroud_conical(n: int = 4) -> tuple[np.ndarray, np.ndarray]:
+    """Barycentric-style data of the conical product rule: (s, t, w) on the unit square.
+
+    A point (s, t) maps to ``v1 + s (v2 - v1) + s t (v3 - v2)``; ``s`` carries the
+    Jacobian, hence Gauss–Jacobi with weight ``s`` on [0, 1].  Weights sum to 1
+    (multiply by twice the triangle area... by the area |T| · 2 · 1/2).
+    """
+    xj, wj = roots_jacobi(n, 0.0, 1.0)  # weight (1 + x) on [-1, 1]
+    s, ws = (xj + 1.0) / 2.0, wj / 4.0  # ∫_0^1 s g(s) ds
+    xl, wl = roots_legendre(n)
+    t, wt = (xl + 1.0) / 2.0, wl / 2.0
+    S, T = np.meshgrid(s, t, indexing="ij")
+    Wq = np.outer(ws, wt)
+    return S.ravel(), T.ravel(), 2.0 * Wq.ravel()  # weights sum to 1 (the area factor is applied per triangle)
+
+
+def gauss_legendre_01(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """n-point Gauss–Legendre rule on [0, 1] (the boundary line rule)."""
+    x, w = roots_legendre(n)
+    return (x + 1.0) / 2.0, w / 2.0

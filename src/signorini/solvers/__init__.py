@@ -1,0 +1,47 @@
+"""Solvers for the discrete Signorini QP behind one interface.
+
+``solve(name, A, b, constrained, **options)`` with ``name`` one of ``SOLVERS``:
+``active_set`` (exact, certified; the pipeline's solver) or ``cvxpy`` (any
+installed cvxpy QP solver chosen by the ``qp_solver`` option); a shorthand
+``cvxpy_clarabel``, ``cvxpy_osqp``, … selects the QP solver in the name.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from signorini.solvers.active_set import active_set_solve
+from signorini.solvers.certificate import BadInputError, Certificate, KKTError, NotConvergedError, kkt_certificate
+from signorini.solvers.cvxpy_qp import cvxpy_solve, installed_qp_solvers
+from signorini.solvers.result import SolveResult
+
+SOLVERS = ("active_set", "cvxpy")
+
+
+def solve(name: str, A: sp.spmatrix, b: np.ndarray, constrained: np.ndarray, **options) -> SolveResult:
+    """Dispatch to a solver route by name; unknown names raise ``ValueError``."""
+    if name == "active_set":
+        return active_set_solve(A, b, constrained, **options)
+    if name == "cvxpy":
+        options.pop("warm_start", None)
+        return cvxpy_solve(A, b, constrained, solver=options.pop("qp_solver", "CLARABEL"), **options)
+    if name.startswith("cvxpy_"):
+        options.pop("warm_start", None)
+        return cvxpy_solve(A, b, constrained, solver=name.removeprefix("cvxpy_"), **options)
+    raise ValueError(f"unknown solver {name!r}; choose one of {SOLVERS} or cvxpy_<QP solver>")
+
+
+__all__ = [
+    "SOLVERS",
+    "BadInputError",
+    "Certificate",
+    "KKTError",
+    "NotConvergedError",
+    "SolveResult",
+    "active_set_solve",
+    "cvxpy_solve",
+    "installed_qp_solvers",
+    "kkt_certificate",
+    "solve",
+]

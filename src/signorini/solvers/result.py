@@ -1,0 +1,34 @@
+"""The common result type of every solver route."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from signorini.solvers.certificate import Certificate
+
+
+@dataclass
+class SolveResult:
+    """Solution ``u``, multiplier ``lam`` (one entry per constrained node), contact set and diagnostics."""
+
+    u: np.ndarray
+    lam: np.ndarray
+    active: np.ndarray  # constrained indices with u_i = 0 (the discrete contact set)
+    iterations: int
+    wall_time_s: float
+    certificate: Certificate
+    solver: str
+    info: dict = field(default_factory=dict)
+
+    def summary(self) -> dict:
+        """JSON-ready diagnostics (everything but the vectors)."""
+        return {
+            "solver": self.solver,
+            "iterations": int(self.iterations),
+            "wall_time_s": float(self.wall_time_s),
+            "n_active": int(self.active.size),
+            "certificate": self.certificate.as_dict(),
+            **self.info,
+        }
