@@ -73,6 +73,6 @@ def solve_discrete(
                 coarse = build(disc.problem, Nc, disc.diagonal)
                 uc = solve_discrete(coarse, solver, "cascade", **options).u
                 warm_start = interpolate_fk(Nc, disc.diagonal, uc, disc.mesh.p)
-                options.setdefault("warm_start_dilation", 2 * CASCADE_FACTOR)
+                options.setdefault("warm_start_dilation", 0)
         options["warm_start"] = warm_start
     return solve(solver, disc.A, disc.b, disc.boundary, **options)

@@ -65,7 +65,10 @@ class Conventions:
 
 @dataclass
 class ErrorField:
-    """``e``, ``∂₁e``, ``∂₂e`` at quadrature points (weights ``dx``), at max points, and on ∂Ω."""
+    """``e``, ``∂₁e``, ``∂₂e`` at quadrature points (weights ``dx``), at max points, and on ∂Ω.
+
+    Parts a norm does not need may be ``None`` (see ``error_field(..., norms=...)``).
+    """
 
     e: np.ndarray
     de: np.ndarray  # (2, ...) gradient at quadrature points
@@ -125,46 +128,86 @@ def _boundary_edges(mesh: MeshTri) -> tuple[np.ndarray, np.ndarray]:
     return facets[0], facets[1]
 
 
-def error_field(problem: Problem, mesh: MeshTri, u_h: np.ndarray, conventions: Conventions | None = None) -> ErrorField:
-    """Evaluate ``e = u - u_h`` and ``∇e`` where the norms need them."""
+def _parts_needed(names: list[str] | None) -> set[str]:
+    """Which evaluations the named norms need: quadrature, linf, w1inf, boundary."""
+    if names is None:
+        return {"quadrature", "linf", "w1inf", "boundary"}
+    parts = set()
+    for name in names:
+        parse_norm(name)  # reject unknown names before any work
+        if name in ("H12", "L2boundary"):
+            parts.add("boundary")
+        elif name.startswith("W1inf"):
+            parts.add("w1inf")
+        elif name.startswith("Linf"):
+            parts.add("linf")
+        else:
+            parts.add("quadrature")
+    return parts
+
+
+def error_field(
+    problem: Problem,
+    mesh: MeshTri,
+    u_h: np.ndarray,
+    conventions: Conventions | None = None,
+    norms: list[str] | None = None,
+) -> ErrorField:
+    """Evaluate ``e = u - u_h`` and ``∇e`` where the norms need them.
+
+    With ``norms`` given, only the evaluations those norms need are made (the
+    others are left ``None``), so one norm can be computed on its own cheaply.
+    """
     conv = conventions or Conventions()
-    X, W, role = _reference_rule(conv.quadrature)
-    qmesh = mesh if role is None else _rolled_mesh(mesh, role)
-    basis = CellBasis(qmesh, ElementTriP1(), quadrature=(X, W))
-    uh = basis.interpolate(u_h)
-    x = basis.global_coordinates().value
-    e = problem.u(x) - uh.value
-    de = problem.grad_u(x) - uh.grad
-    dx = basis.dx
+    parts = _parts_needed(norms)
+    cache: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+
+    def at_quadrature() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        if "quadrature" not in cache:
+            X, W, role = _reference_rule(conv.quadrature)
+            qmesh = mesh if role is None else _rolled_mesh(mesh, role)
+            basis = CellBasis(qmesh, ElementTriP1(), quadrature=(X, W))
+            uh = basis.interpolate(u_h)
+            x = basis.global_coordinates().value
+            cache["quadrature"] = (problem.u(x) - uh.value, problem.grad_u(x) - uh.grad)
+            cache["dx"] = basis.dx
+        return (*cache["quadrature"], cache["dx"])
 
     def at_points(which: str) -> tuple[np.ndarray, np.ndarray]:
         if which == "quadrature":
-            return e, de
-        pts = _element_points(mesh, which)
-        mbasis = CellBasis(mesh, ElementTriP1(), quadrature=(pts, np.ones(pts.shape[1])))
-        muh = mbasis.interpolate(u_h)
-        mx = mbasis.global_coordinates().value
-        pe, pde = problem.u(mx) - muh.value, problem.grad_u(mx) - muh.grad
-        if which == "all":
-            return np.concatenate([pe, e], axis=-1), np.concatenate([pde, de], axis=-1)
-        return pe, pde
+            return at_quadrature()[:2]
+        if which not in cache:
+            pts = _element_points(mesh, which)
+            mbasis = CellBasis(mesh, ElementTriP1(), quadrature=(pts, np.ones(pts.shape[1])))
+            muh = mbasis.interpolate(u_h)
+            mx = mbasis.global_coordinates().value
+            pe, pde = problem.u(mx) - muh.value, problem.grad_u(mx) - muh.grad
+            if which == "all":
+                e, de, _ = at_quadrature()
+                pe, pde = np.concatenate([pe, e], axis=-1), np.concatenate([pde, de], axis=-1)
+            cache[which] = (pe, pde)
+        return cache[which]
 
-    e_max, _ = at_points(conv.linf_points)
-    _, de_max = at_points(conv.w1inf_points)
-    e_w1 = at_points(conv.w1inf_points)[0] if conv.w1p_form != "seminorm" else e_max[:0]
-
-    # boundary: Gauss–Legendre on every boundary edge
-    a, b = _boundary_edges(mesh)
-    s, ws = gauss_legendre_01(BOUNDARY_POINTS)
-    pa, pb = mesh.p[:, a], mesh.p[:, b]
-    length = np.linalg.norm(pb - pa, axis=0)
-    tangent = (pb - pa) / length
-    xb = pa[:, :, None] + (pb - pa)[:, :, None] * s[None, None, :]
-    uhb = u_h[a][:, None] * (1.0 - s) + u_h[b][:, None] * s
-    duh_t = ((u_h[b] - u_h[a]) / length)[:, None]
-    eb = problem.u(xb) - uhb
-    dteb = np.einsum("ie,iek->ek", tangent, problem.grad_u(xb)) - duh_t
-    dsb = length[:, None] * ws[None, :]
+    e = de = dx = e_max = de_max = e_w1 = eb = dteb = dsb = None
+    if "quadrature" in parts:
+        e, de, dx = at_quadrature()
+    if "linf" in parts:
+        e_max = at_points(conv.linf_points)[0]
+    if "w1inf" in parts:
+        e_w1, de_max = at_points(conv.w1inf_points)
+    if "boundary" in parts:
+        # Gauss–Legendre on every boundary edge; u_h is linear along each edge
+        a, b = _boundary_edges(mesh)
+        s, ws = gauss_legendre_01(BOUNDARY_POINTS)
+        pa, pb = mesh.p[:, a], mesh.p[:, b]
+        length = np.linalg.norm(pb - pa, axis=0)
+        tangent = (pb - pa) / length
+        xb = pa[:, :, None] + (pb - pa)[:, :, None] * s[None, None, :]
+        uhb = u_h[a][:, None] * (1.0 - s) + u_h[b][:, None] * s
+        duh_t = ((u_h[b] - u_h[a]) / length)[:, None]
+        eb = problem.u(xb) - uhb
+        dteb = np.einsum("ie,iek->ek", tangent, problem.grad_u(xb)) - duh_t
+        dsb = length[:, None] * ws[None, :]
     return ErrorField(e, de, dx, e_max, de_max, e_w1, eb, dteb, dsb, conv)
 
 
