@@ -23,7 +23,7 @@ import pandas as pd
 
 from signorini.artifacts import load_npz, save_npz
 from signorini.discrete import build, solve_discrete
-from signorini.norms import MAX_POINTS, QUADRATURES, W1P_FORMS, H12_FORMS, Conventions, error_field, parse_norm
+from signorini.norms import H12_FORMS, MAX_POINTS, QUADRATURES, W1P_FORMS, Conventions, error_field, parse_norm
 from signorini.problem import Problem
 
 ROOT = Path(__file__).resolve().parents[1]

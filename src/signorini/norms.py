@@ -42,9 +42,9 @@ class UnknownNormError(ValueError):
 class Conventions:
     """The choices the paper leaves open (see the README for the evidence behind the defaults)."""
 
-    quadrature: str = "dunavant8"
+    quadrature: str = "stroud4_acute1"
     w1p_form: str = "components"
-    linf_points: str = "midpoints"
+    linf_points: str = "all"
     w1inf_points: str = "quadrature"
     h12_form: str = "geometric_full"
 

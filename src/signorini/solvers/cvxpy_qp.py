@@ -29,8 +29,9 @@ TOLERANCE_OPTIONS: dict[str, tuple[tuple[str, ...], float]] = {
 def installed_qp_solvers() -> list[str]:
     """cvxpy's installed solvers that accept a QP with bound constraints."""
     import cvxpy as cp
+    from cvxpy.reductions.solvers.defines import QP_SOLVERS
 
-    qp = set(cp.settings.QP_SOLVERS) | {"CLARABEL", "SCS"}
+    qp = set(QP_SOLVERS) | {"CLARABEL", "SCS"}  # conic solvers that take quadratic objectives
     return sorted(s for s in cp.installed_solvers() if s in qp)
 
 
