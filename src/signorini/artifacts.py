@@ -88,3 +88,8 @@ def load_json(path: str | os.PathLike) -> dict:
 def atomic_write_text(path: str | os.PathLike, text: str) -> None:
     """Write a text file (tables, markdown) atomically."""
     _atomic_write(path, lambda fh: fh.write(text.encode()))
+
+
+def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
+    """Write a binary file (figures) atomically."""
+    _atomic_write(path, lambda fh: fh.write(data))

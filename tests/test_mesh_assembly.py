@@ -1,0 +1,318 @@
+"""Friedrichs–Keller meshes, the P1 system matrix, the load vector and ``interpolate_fk``."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from skfem import CellBasis, ElementTriP1
+
+from signorini import Problem
+from signorini.assembly import INTORDER, assemble, load_vector, p1_basis, system_matrix
+from signorini.discrete import build, interpolate_fk
+from signorini.mesh import DIAGONALS, boundary_nodes, friedrichs_keller, mesh_width
+
+SIZES = [1, 2, 3, 8]
+
+
+def signed_areas(p: np.ndarray, t: np.ndarray) -> np.ndarray:
+    a, b, c = p[:, t[0]], p[:, t[1]], p[:, t[2]]
+    return 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+
+
+def edges_of(t: np.ndarray) -> np.ndarray:
+    """Unique undirected edges (2, n_edges) of a triangle array."""
+    e = np.hstack([t[[0, 1]], t[[1, 2]], t[[2, 0]]])
+    return np.unique(np.sort(e, axis=0), axis=1)
+
+
+# ---------------------------------------------------------------------------------
+# meshes
+# ---------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("diagonal", DIAGONALS)
+@pytest.mark.parametrize("N", SIZES)
+def test_mesh_counts_and_width(N, diagonal):
+    mesh = friedrichs_keller(N, diagonal)
+    assert mesh.p.shape == (2, (N + 1) ** 2)
+    assert mesh.t.shape == (3, 2 * N * N)
+    assert mesh_width(N) == 1.0 / N
+    assert edges_of(mesh.t).shape[1] == 3 * N * N + 2 * N  # N(N+1) horizontal + vertical each, N² diagonals
+    assert np.unique(mesh.p.round(12), axis=1).shape[1] == (N + 1) ** 2
+
+
+@pytest.mark.parametrize("N", SIZES)
+def test_vertex_numbering_convention(N):
+    """Vertex (i, j) sits at (i/N, j/N) with index i (N + 1) + j (interpolate_fk relies on it)."""
+    mesh = friedrichs_keller(N)
+    i, j = np.divmod(np.arange((N + 1) ** 2), N + 1)
+    np.testing.assert_allclose(mesh.p, np.vstack([i / N, j / N]), rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("diagonal", DIAGONALS)
+@pytest.mark.parametrize("N", SIZES)
+def test_triangles_are_right_isosceles_with_area_h2_over_2(N, diagonal):
+    mesh = friedrichs_keller(N, diagonal)
+    h = mesh_width(N)
+    area = signed_areas(mesh.p, mesh.t)
+    # scikit-fem's MeshTri sorts each triangle's vertex indices, so the stored orientation
+    # is mixed; the areas (what assembly and the norms use) are all h²/2
+    np.testing.assert_allclose(np.abs(area), h * h / 2, rtol=1e-12)
+    assert np.abs(area).sum() == pytest.approx(1.0, rel=1e-12)
+    # two legs of length h and a hypotenuse h√2 in every triangle
+    lengths = np.sort(
+        np.array([np.linalg.norm(mesh.p[:, mesh.t[k]] - mesh.p[:, mesh.t[(k + 1) % 3]], axis=0) for k in range(3)]),
+        axis=0,
+    )
+    np.testing.assert_allclose(lengths[:2], h, rtol=1e-12)
+    np.testing.assert_allclose(lengths[2], h * math.sqrt(2), rtol=1e-12)
+
+
+@pytest.mark.parametrize("diagonal", DIAGONALS)
+@pytest.mark.parametrize("N", [2, 5])
+def test_triangles_cover_the_square_without_overlap(N, diagonal, rng):
+    """Every random point lies in exactly one triangle (barycentric test)."""
+    mesh = friedrichs_keller(N, diagonal)
+    x = rng.uniform(0, 1, size=(2, 400))
+    a, b, c = (mesh.p[:, mesh.t[k]] for k in range(3))
+    det = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    l1 = ((x[0][:, None] - a[0]) * (c[1] - a[1]) - (x[1][:, None] - a[1]) * (c[0] - a[0])) / det
+    l2 = ((b[0] - a[0]) * (x[1][:, None] - a[1]) - (b[1] - a[1]) * (x[0][:, None] - a[0])) / det
+    inside = (l1 > -1e-12) & (l2 > -1e-12) & (l1 + l2 < 1 + 1e-12)
+    assert np.all(inside.sum(axis=1) == 1)
+
+
+@pytest.mark.parametrize("N", [1, 4, 7])
+def test_diagonal_direction(N):
+    h = mesh_width(N)
+    for diagonal, sign in (("sw_ne", 1.0), ("nw_se", -1.0)):
+        mesh = friedrichs_keller(N, diagonal)
+        e = edges_of(mesh.t)
+        d = mesh.p[:, e[1]] - mesh.p[:, e[0]]
+        diag = np.abs(np.hypot(d[0], d[1]) - h * math.sqrt(2)) < 1e-12
+        assert diag.sum() == N * N  # one diagonal per cell
+        # "/" diagonals: Δx Δy > 0 ; "\\" diagonals: Δx Δy < 0
+        assert np.all(np.sign(d[0, diag] * d[1, diag]) == sign)
+
+
+@pytest.mark.parametrize("diagonal", DIAGONALS)
+@pytest.mark.parametrize("N", SIZES)
+def test_boundary_nodes(N, diagonal):
+    mesh = friedrichs_keller(N, diagonal)
+    B = boundary_nodes(mesh)
+    assert B.size == 4 * N
+    assert np.all(np.diff(B) > 0), "sorted and unique"
+    x, y = mesh.p
+    on_boundary = np.isclose(x, 0) | np.isclose(x, 1) | np.isclose(y, 0) | np.isclose(y, 1)
+    np.testing.assert_array_equal(B, np.flatnonzero(on_boundary))
+
+
+def test_jitter_moves_only_interior_nodes_reproducibly():
+    N, jitter = 8, 0.3
+    plain = friedrichs_keller(N)
+    a = friedrichs_keller(N, jitter=jitter, seed=3)
+    b = friedrichs_keller(N, jitter=jitter, seed=3)
+    c = friedrichs_keller(N, jitter=jitter, seed=4)
+    np.testing.assert_array_equal(a.p, b.p)
+    assert not np.array_equal(a.p, c.p)
+    B = boundary_nodes(plain)
+    np.testing.assert_array_equal(a.p[:, B], plain.p[:, B])
+    interior = np.setdiff1d(np.arange(plain.p.shape[1]), B)
+    shift = np.abs(a.p[:, interior] - plain.p[:, interior])
+    assert shift.max() <= jitter / N + 1e-15 and shift.max() > 0
+    # no triangle is inverted or degenerate: the orientation of each triangle is unchanged
+    np.testing.assert_array_equal(a.t, plain.t)
+    s0, s1 = signed_areas(plain.p, plain.t), signed_areas(a.p, a.t)
+    assert np.all(np.sign(s0) == np.sign(s1)) and np.abs(s1).min() > 0.0
+    assert np.abs(s1).sum() == pytest.approx(1.0, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        dict(N=0),
+        dict(N=-3),
+        dict(N=2.5),
+        dict(N=True),
+        dict(N="4"),
+        dict(N=4, diagonal="x"),
+        dict(N=4, jitter=0.5),
+        dict(N=4, jitter=-0.1),
+    ],
+)
+def test_invalid_mesh_arguments_raise(kwargs):
+    with pytest.raises(ValueError):
+        friedrichs_keller(**kwargs)
+
+
+def test_numpy_integer_N_is_accepted():
+    assert friedrichs_keller(np.int64(3)).t.shape == (3, 18)
+
+
+# ---------------------------------------------------------------------------------
+# interpolate_fk
+# ---------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("diagonal", DIAGONALS)
+@pytest.mark.parametrize("N", [1, 3, 7])
+def test_interpolate_fk_matches_scikit_fem_probes(N, diagonal, rng):
+    mesh = friedrichs_keller(N, diagonal)
+    values = rng.normal(size=mesh.p.shape[1])
+    pts = np.hstack([rng.uniform(0, 1, size=(2, 300)), mesh.p, [[0, 1, 1, 0], [0, 0, 1, 1]]])
+    probes = CellBasis(mesh, ElementTriP1()).probes(pts)
+    np.testing.assert_allclose(interpolate_fk(N, diagonal, values, pts), probes @ values, rtol=0, atol=1e-13)
+    np.testing.assert_allclose(interpolate_fk(N, diagonal, values, mesh.p), values, rtol=0, atol=1e-14)
+
+
+@pytest.mark.parametrize("diagonal", DIAGONALS)
+def test_interpolate_fk_reproduces_linear_functions_across_meshes(diagonal, rng):
+    """Prolongation from N = 5 to the vertices of N = 20 is exact for linear functions."""
+    coarse, fine = friedrichs_keller(5, diagonal), friedrichs_keller(20, diagonal)
+    lin = lambda x: 0.3 - 1.7 * x[0] + 2.2 * x[1]  # noqa: E731
+    np.testing.assert_allclose(interpolate_fk(5, diagonal, lin(coarse.p), fine.p), lin(fine.p), atol=1e-14)
+
+
+# ---------------------------------------------------------------------------------
+# assembly: A = K + c M
+# ---------------------------------------------------------------------------------
+
+
+def lumped_mass(mesh) -> np.ndarray:
+    """∫ φ_i = (number of triangles at vertex i) · |T| / 3 on a uniform FK mesh."""
+    h = 1.0 / (round(math.sqrt(mesh.p.shape[1])) - 1)
+    counts = np.bincount(mesh.t.ravel(), minlength=mesh.p.shape[1])
+    return counts * (h * h / 2) / 3
+
+
+@pytest.mark.parametrize("c", [0.0, 1.0, 3.5])
+@pytest.mark.parametrize("diagonal", DIAGONALS)
+def test_system_matrix_identities(c, diagonal):
+    N = 6
+    mesh = friedrichs_keller(N, diagonal)
+    A = system_matrix(p1_basis(mesh), c)
+    assert sp.issparse(A) and A.shape == (mesh.p.shape[1],) * 2
+    assert abs(A - A.T).max() < 1e-14
+    one = np.ones(A.shape[0])
+    # K·1 = 0, so A·1 = c·M·1 = c·∫φ_i, and 1ᵀA1 = c |Ω| = c
+    np.testing.assert_allclose(A @ one, c * lumped_mass(mesh), rtol=0, atol=1e-14)
+    assert one @ A @ one == pytest.approx(c, abs=1e-13)
+    # v = x₁ + 2 x₂ is P1: vᵀAv = ∫|∇v|² + c ∫v² = 5 + c · 8/3 exactly
+    v = mesh.p[0] + 2 * mesh.p[1]
+    assert v @ A @ v == pytest.approx(5.0 + c * 8.0 / 3.0, rel=1e-13)
+    # discrete harmonicity of linear functions: (K v)_i = 0 at interior vertices
+    K = system_matrix(p1_basis(mesh), 0.0)
+    interior = np.setdiff1d(np.arange(v.size), boundary_nodes(mesh))
+    np.testing.assert_allclose((K @ v)[interior], 0.0, atol=1e-13)
+
+
+@pytest.mark.parametrize("diagonal", DIAGONALS)
+def test_stiffness_is_the_five_point_stencil_and_mass_has_the_p1_entries(diagonal):
+    N = 5
+    h = mesh_width(N)
+    mesh = friedrichs_keller(N, diagonal)
+    K = system_matrix(p1_basis(mesh), 0.0).toarray()
+    M = system_matrix(p1_basis(mesh), 1.0).toarray() - K
+    idx = lambda i, j: i * (N + 1) + j  # noqa: E731
+    for i, j in [(1, 1), (2, 3), (4, 4)]:
+        k = idx(i, j)
+        assert K[k, k] == pytest.approx(4.0)
+        for di, dj in [(1, 0), (-1, 0), (0, 1), (0, -1)]:
+            assert K[k, idx(i + di, j + dj)] == pytest.approx(-1.0)
+        assert np.count_nonzero(np.abs(K[k]) > 1e-12) == 5  # diagonal neighbours carry 0
+        assert M[k, k] == pytest.approx(h * h / 2)  # 6 triangles × |T|/6
+        assert np.count_nonzero(np.abs(M[k]) > 1e-15) == 7
+        assert np.sort(M[k][np.abs(M[k]) > 1e-15])[:6] == pytest.approx([h * h / 12] * 6)
+
+
+def test_system_matrix_is_positive_definite_for_c_positive():
+    A = system_matrix(p1_basis(friedrichs_keller(5)), 1.0).toarray()
+    assert np.linalg.eigvalsh(A).min() > 0.0
+
+
+# ---------------------------------------------------------------------------------
+# assembly: the load vector b_i = ∫ f φ_i
+# ---------------------------------------------------------------------------------
+
+# f = Σ coefficient · x₁^a x₂^b, total degree ≤ 7 so that f φ_i (degree ≤ 8) is integrated exactly
+MONOMIALS = [(1.0, 0, 0), (2.0, 5, 0), (-1.0, 0, 7), (1.5, 3, 4), (-0.7, 2, 2), (0.4, 1, 6)]
+
+
+class PolynomialSource:
+    """A duck-typed 'problem' with only ``f`` (all that ``load_vector`` uses)."""
+
+    c = 0.0
+
+    def f(self, x):
+        return sum(k * x[0] ** a * x[1] ** b for k, a, b in MONOMIALS)
+
+
+def exact_moment(da: int, db: int) -> float:
+    """∫_Ω f x₁^da x₂^db over the unit square."""
+    return sum(k / ((a + da + 1) * (b + db + 1)) for k, a, b in MONOMIALS)
+
+
+def test_p1_basis_uses_the_16_point_degree_8_rule():
+    basis = p1_basis(friedrichs_keller(2))
+    assert INTORDER == 8
+    assert basis.X.shape[1] == 16
+    assert basis.W.sum() == pytest.approx(0.5)
+
+
+@pytest.mark.parametrize("diagonal", DIAGONALS)
+@pytest.mark.parametrize("N", [3, 8])
+def test_load_vector_is_exact_for_degree_7_sources(N, diagonal):
+    mesh = friedrichs_keller(N, diagonal)
+    b = load_vector(p1_basis(mesh), PolynomialSource())
+    assert b.shape == (mesh.p.shape[1],)
+    # Σ φ_i = 1, x₁ = Σ x₁(v_i) φ_i, x₂ likewise: three exact moments
+    assert b.sum() == pytest.approx(exact_moment(0, 0), rel=1e-13)
+    assert b @ mesh.p[0] == pytest.approx(exact_moment(1, 0), rel=1e-13)
+    assert b @ mesh.p[1] == pytest.approx(exact_moment(0, 1), rel=1e-13)
+    # entry by entry: a much higher-order rule gives the same vector
+    b_ref = load_vector(p1_basis(mesh, intorder=16), PolynomialSource())
+    np.testing.assert_allclose(b, b_ref, rtol=0, atol=1e-14 * np.abs(b_ref).max())
+
+
+def test_load_vector_is_not_exact_beyond_degree_8():
+    """Sanity check of the previous test: the rule really is of degree 8, not more."""
+
+    class Degree9:
+        def f(self, x):
+            return x[0] ** 9  # f φ has degree 10
+
+    mesh = friedrichs_keller(2)
+    b = load_vector(p1_basis(mesh), Degree9())
+    b_ref = load_vector(p1_basis(mesh, intorder=16), Degree9())
+    assert np.abs(b - b_ref).max() > 1e-9
+
+
+def test_assemble_combines_matrix_and_load():
+    problem = Problem(c=2.0)
+    mesh = friedrichs_keller(10, "nw_se")
+    A, b = assemble(mesh, problem)
+    basis = p1_basis(mesh)
+    assert abs(A - system_matrix(basis, 2.0)).max() == 0.0
+    np.testing.assert_array_equal(b, load_vector(basis, problem))
+
+
+def test_load_vector_of_the_manufactured_problem_converges_with_quadrature_order():
+    """b for the real f: the degree-8 rule agrees with a degree-16 rule to high relative accuracy."""
+    mesh = friedrichs_keller(20)
+    problem = Problem()
+    b8 = load_vector(p1_basis(mesh), problem)
+    b16 = load_vector(p1_basis(mesh, intorder=16), problem)
+    assert np.abs(b8 - b16).max() < 1e-4 * np.abs(b16).max()
+
+
+def test_build_bundles_a_consistent_discrete_problem():
+    problem = Problem(x0=0.47)
+    disc = build(problem, 9, "nw_se")
+    assert disc.N == 9 and disc.diagonal == "nw_se" and disc.problem is problem
+    np.testing.assert_array_equal(disc.boundary, boundary_nodes(disc.mesh))
+    A, b = assemble(friedrichs_keller(9, "nw_se"), problem)
+    assert abs(disc.A - A).max() == 0.0
+    np.testing.assert_array_equal(disc.b, b)

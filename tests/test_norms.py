@@ -1,0 +1,442 @@
+"""Norms of e = u − u_h where the answer is known in closed form, the norm-name registry,
+and the quadrature rules behind them.
+
+``error_field`` only calls ``problem.u(x)`` and ``problem.grad_u(x)``, so small
+duck-typed classes stand in for the manufactured problem here.  References are
+closed forms or tensor Gauss–Legendre integrals over the square (exact for the
+polynomials used), independent of the package.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from numpy.polynomial.legendre import leggauss
+
+from signorini.mesh import friedrichs_keller
+from signorini.norms import (
+    H12_FORMS,
+    MAX_POINTS,
+    QUADRATURES,
+    W1P_FORMS,
+    Conventions,
+    UnknownNormError,
+    boundary_h1_seminorm,
+    boundary_l2_norm,
+    compute_norms,
+    error_field,
+    h1_norm,
+    h12_interpolation_norm,
+    linf_norm,
+    lp_norm,
+    parse_norm,
+    w1inf_norm,
+    w1p_norm,
+)
+from signorini.quadrature import dunavant8, gauss_legendre_01, stroud_conical
+
+PAPER_NORMS = ["L4", "L16", "Linf", "W14", "W116", "W1inf", "H12"]
+
+
+class Linear:
+    """u(x) = a0 + a1 x₁ + a2 x₂."""
+
+    def __init__(self, a0: float, a1: float, a2: float):
+        self.a = (a0, a1, a2)
+
+    def u(self, x):
+        return self.a[0] + self.a[1] * x[0] + self.a[2] * x[1]
+
+    def grad_u(self, x):
+        return np.stack([np.full(x.shape[1:], self.a[1]), np.full(x.shape[1:], self.a[2])])
+
+
+class Quadratic:
+    """u(x) = x₁ (1 − x₁): maximum 1/4 on the line x₁ = 1/2."""
+
+    def u(self, x):
+        return x[0] * (1.0 - x[0])
+
+    def grad_u(self, x):
+        return np.stack([1.0 - 2.0 * x[0], np.zeros(x.shape[1:])])
+
+
+ZERO = Linear(0.0, 0.0, 0.0)
+
+
+# --- independent references -------------------------------------------------------
+
+
+def square_integral(g, n: int = 20) -> float:
+    """∫_{(0,1)²} g by an n×n Gauss–Legendre tensor rule (exact to degree 2n − 1 per variable)."""
+    t, w = leggauss(n)
+    t, w = (t + 1) / 2, w / 2
+    X, Y = np.meshgrid(t, t, indexing="ij")
+    return float(np.sum(np.outer(w, w) * g(np.array([X, Y]))))
+
+
+def boundary_integral(g, n: int = 20) -> float:
+    """∮_{∂Ω} g(x, tangent) ds, edge by edge (counter-clockwise)."""
+    t, w = leggauss(n)
+    t, w = (t + 1) / 2, w / 2
+    total = 0.0
+    for start, end in [((0, 0), (1, 0)), ((1, 0), (1, 1)), ((1, 1), (0, 1)), ((0, 1), (0, 0))]:
+        a, b = np.array(start, float), np.array(end, float)
+        x = a[:, None] + (b - a)[:, None] * t[None, :]
+        total += float(np.sum(w * g(x, b - a)))
+    return total
+
+
+def field(problem, N=8, u_h=None, diagonal="sw_ne", **conventions):
+    mesh = friedrichs_keller(N, diagonal)
+    uh = np.zeros(mesh.p.shape[1]) if u_h is None else u_h(mesh.p)
+    return error_field(problem, mesh, uh, Conventions(**conventions))
+
+
+# ---------------------------------------------------------------------------------
+# closed forms: e = x₁ (u = x₁, u_h = 0)
+# ---------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("quadrature", QUADRATURES)
+@pytest.mark.parametrize("p", [1, 2, 3, 4, 7])
+def test_lp_norm_of_x1_is_exact(p, quadrature):
+    """‖x₁‖_{L^p} = (1/(p+1))^{1/p}; |x₁|^p has degree ≤ 7, within every rule's degree."""
+    f = field(Linear(0, 1, 0), quadrature=quadrature)
+    assert f.dx.sum() == pytest.approx(1.0, rel=1e-14)
+    assert lp_norm(f, p) == pytest.approx((1.0 / (p + 1)) ** (1.0 / p), rel=1e-13)
+    assert compute_norms(f, [f"L{p}"])[f"L{p}"] == lp_norm(f, p)
+
+
+@pytest.mark.parametrize("p", [2.5, 16])
+def test_lp_norm_of_x1_beyond_the_rule_degree_is_accurate(p):
+    f = field(Linear(0, 1, 0), N=16)
+    assert lp_norm(f, p) == pytest.approx((1.0 / (p + 1)) ** (1.0 / p), rel=1e-7)
+
+
+@pytest.mark.parametrize("form", W1P_FORMS)
+@pytest.mark.parametrize("p", [1, 2, 4])
+def test_w1p_norm_of_x1(p, form):
+    f = field(Linear(0, 1, 0), w1p_form=form)
+    lp = 1.0 / (p + 1)
+    expected = {"components": (lp + 1 + 0) ** (1 / p), "gradient": (lp + 1) ** (1 / p), "seminorm": 1.0}[form]
+    assert w1p_norm(f, p) == pytest.approx(expected, rel=1e-13)
+    assert parse_norm(f"W1{p}")(f) == pytest.approx(expected, rel=1e-13)
+
+
+@pytest.mark.parametrize("w1inf_points", MAX_POINTS)
+@pytest.mark.parametrize("linf_points", MAX_POINTS)
+@pytest.mark.parametrize("form", W1P_FORMS)
+def test_maxima_of_x1(form, linf_points, w1inf_points):
+    f = field(Linear(0, 1, 0), w1p_form=form, linf_points=linf_points, w1inf_points=w1inf_points)
+    # |∇x₁| = 1 and |x₁| ≤ 1: W^{1,∞} = 1 in every form and on every point set
+    assert w1inf_norm(f) == pytest.approx(1.0, rel=1e-14)
+    if linf_points == "quadrature":  # interior points of the triangles at x₁ = 1
+        assert 1.0 - 1.0 / 8 < linf_norm(f) < 1.0
+    else:  # vertices and edge midpoints on x₁ = 1
+        assert linf_norm(f) == pytest.approx(1.0, rel=1e-14)
+
+
+def test_h1_and_boundary_norms_of_x1():
+    f = field(Linear(0, 1, 0))
+    assert h1_norm(f) == pytest.approx(math.sqrt(1 / 3 + 1), rel=1e-13)
+    # ∮ x₁² = 1/3 (bottom) + 1 (right) + 1/3 (top) + 0 (left); ∮ (∂_t x₁)² = 1 + 0 + 1 + 0
+    l2, semi = math.sqrt(5 / 3), math.sqrt(2.0)
+    assert boundary_l2_norm(f) == pytest.approx(l2, rel=1e-13)
+    assert boundary_h1_seminorm(f) == pytest.approx(semi, rel=1e-13)
+    assert parse_norm("L2boundary")(f) == pytest.approx(l2, rel=1e-13)
+    assert h12_interpolation_norm(f) == pytest.approx(math.sqrt(l2 * math.sqrt(l2**2 + semi**2)), rel=1e-13)
+    g = field(Linear(0, 1, 0), h12_form="geometric_semi")
+    assert h12_interpolation_norm(g) == pytest.approx(math.sqrt(l2 * semi), rel=1e-13)
+
+
+# ---------------------------------------------------------------------------------
+# a gradient that distinguishes the W^{1,p} forms: e = 2x₁ − x₂ + 0.3
+# ---------------------------------------------------------------------------------
+
+TILTED = Linear(0.3, 2.0, -1.0)
+
+
+@pytest.mark.parametrize("diagonal", ["sw_ne", "nw_se"])
+@pytest.mark.parametrize("form", W1P_FORMS)
+def test_w1p_forms_against_tensor_gauss_integrals(form, diagonal):
+    f = field(TILTED, N=6, diagonal=diagonal, w1p_form=form)
+    p = 4
+    int_e = square_integral(lambda x: TILTED.u(x) ** 4)
+    grad_part = {"components": 2.0**4 + 1.0**4, "gradient": 5.0**2, "seminorm": 5.0**2}[form]
+    expected = ((0.0 if form == "seminorm" else int_e) + grad_part) ** (1 / p)
+    assert w1p_norm(f, p) == pytest.approx(expected, rel=1e-13)
+    assert lp_norm(f, 4) == pytest.approx(int_e**0.25, rel=1e-13)
+    assert h1_norm(f) == pytest.approx(math.sqrt(square_integral(lambda x: TILTED.u(x) ** 2) + 5.0), rel=1e-13)
+
+
+@pytest.mark.parametrize("form", W1P_FORMS)
+def test_w1inf_forms(form):
+    f = field(TILTED, N=6, w1p_form=form, w1inf_points="vertices")
+    # max |e| = 2.3 at (1, 0); |∂₁e| = 2, |∂₂e| = 1, |∇e| = √5 ≈ 2.236
+    expected = {"components": 2.3, "gradient": 2.3, "seminorm": math.sqrt(5.0)}[form]
+    assert w1inf_norm(f) == pytest.approx(expected, rel=1e-14)
+    g = field(Linear(0.0, 2.0, -1.0), N=6, w1p_form=form, w1inf_points="vertices")  # max |e| = 2
+    expected = {"components": 2.0, "gradient": math.sqrt(5.0), "seminorm": math.sqrt(5.0)}[form]
+    assert w1inf_norm(g) == pytest.approx(expected, rel=1e-14)
+
+
+def test_boundary_norms_against_edge_gauss_integrals():
+    f = field(TILTED, N=6)
+    l2 = math.sqrt(boundary_integral(lambda x, d: TILTED.u(x) ** 2))
+    semi = math.sqrt(boundary_integral(lambda x, d: np.full(x.shape[1], (2.0 * d[0] - d[1]) ** 2)))
+    assert boundary_l2_norm(f) == pytest.approx(l2, rel=1e-13)
+    assert boundary_h1_seminorm(f) == pytest.approx(semi, rel=1e-13)
+
+
+def test_norms_on_a_jittered_mesh_are_still_exact():
+    mesh = friedrichs_keller(6, jitter=0.3, seed=1)
+    f = error_field(TILTED, mesh, np.zeros(mesh.p.shape[1]))
+    assert f.dx.sum() == pytest.approx(1.0, rel=1e-13)
+    assert lp_norm(f, 4) == pytest.approx(square_integral(lambda x: TILTED.u(x) ** 4) ** 0.25, rel=1e-13)
+    assert boundary_l2_norm(f) == pytest.approx(math.sqrt(boundary_integral(lambda x, d: TILTED.u(x) ** 2)), rel=1e-13)
+
+
+# ---------------------------------------------------------------------------------
+# the point sets of the maxima
+# ---------------------------------------------------------------------------------
+
+
+def test_linf_point_sets_see_what_they_should():
+    """e = x₁(1 − x₁) on N = 7: the maximum 1/4 sits at x₁ = 1/2, which is no vertex
+    but an edge midpoint ((3.5)/7); vertices only reach x₁ = 3/7."""
+    vertices = linf_norm(field(Quadratic(), N=7, linf_points="vertices"))
+    midpoints = linf_norm(field(Quadratic(), N=7, linf_points="midpoints"))
+    everything = linf_norm(field(Quadratic(), N=7, linf_points="all"))
+    quadrature = linf_norm(field(Quadratic(), N=7, linf_points="quadrature"))
+    assert vertices == pytest.approx(3 / 7 * 4 / 7, rel=1e-14)
+    assert midpoints == pytest.approx(0.25, rel=1e-14)
+    assert everything == pytest.approx(0.25, rel=1e-14)
+    assert vertices < quadrature < 0.25
+
+
+# ---------------------------------------------------------------------------------
+# one-sided parts, the sign of e, and u_h ≠ 0
+# ---------------------------------------------------------------------------------
+
+
+def test_plus_and_minus_parts():
+    """e = x₁ − 1/4 on N = 8 (the kink lies on a mesh line, so the rule stays exact)."""
+    f = field(Linear(-0.25, 1.0, 0.0), N=8)
+    plus, minus = (0.75**5 / 5) ** 0.25, (0.25**5 / 5) ** 0.25
+    norms = compute_norms(f, ["L4plus", "L4minus", "L4", "Linfplus", "Linfminus", "Linf"])
+    assert norms["L4plus"] == pytest.approx(plus, rel=1e-13)
+    assert norms["L4minus"] == pytest.approx(minus, rel=1e-13)
+    assert norms["L4"] ** 4 == pytest.approx(plus**4 + minus**4, rel=1e-13)
+    assert norms["Linfplus"] == pytest.approx(0.75, rel=1e-14)
+    assert norms["Linfminus"] == pytest.approx(0.25, rel=1e-14)
+    assert norms["Linf"] == pytest.approx(0.75, rel=1e-14)
+
+
+def test_error_is_u_minus_uh():
+    """u = 0, u_h = x₂: e = −x₂, so all of e lies in the negative part."""
+    f = field(ZERO, N=5, u_h=lambda p: p[1])
+    norms = compute_norms(f, ["L4", "L4plus", "L4minus", "Linf", "W1inf", "H1"])
+    assert norms["L4plus"] == 0.0
+    assert norms["L4minus"] == pytest.approx(0.2**0.25, rel=1e-13)
+    assert norms["L4"] == pytest.approx(0.2**0.25, rel=1e-13)
+    assert norms["Linf"] == pytest.approx(1.0, rel=1e-14)
+    assert norms["W1inf"] == pytest.approx(1.0, rel=1e-14)
+    assert norms["H1"] == pytest.approx(math.sqrt(1 / 3 + 1), rel=1e-13)
+    np.testing.assert_allclose(f.de[1], -1.0, rtol=1e-13)
+    np.testing.assert_allclose(f.de[0], 0.0, atol=1e-13)
+
+
+@pytest.mark.parametrize("quadrature", QUADRATURES)
+@pytest.mark.parametrize("diagonal", ["sw_ne", "nw_se"])
+def test_interpolant_of_a_linear_function_has_zero_error(diagonal, quadrature):
+    f = field(TILTED, N=7, u_h=TILTED.u, diagonal=diagonal, quadrature=quadrature)
+    norms = compute_norms(f, PAPER_NORMS + ["L2", "H1", "L4plus", "L4minus", "L2boundary"])
+    assert max(norms.values()) < 1e-13, norms
+
+
+def test_manufactured_solution_interpolation_error_decreases():
+    """u_h = nodal interpolant of the real u: every norm of the error shrinks under refinement."""
+    from signorini import Problem
+
+    problem = Problem()
+    coarse = field(problem, N=10, u_h=lambda p: problem.u(p))
+    fine = field(problem, N=20, u_h=lambda p: problem.u(p))
+    nc, nf = compute_norms(coarse, PAPER_NORMS), compute_norms(fine, PAPER_NORMS)
+    for name in PAPER_NORMS:
+        assert 0.0 < nf[name] < nc[name], name
+
+
+# ---------------------------------------------------------------------------------
+# the registry of norm names
+# ---------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "L0.5",
+        "foo",
+        "W1infplus",
+        "W14plus",
+        "W14minus",
+        "L",
+        "W1",
+        "",
+        "l4",
+        "Lp",
+        "L-2",
+        "H1/2",
+        "W2,4",
+        "L4 ",
+        "Linfinity",
+        "L4plusminus",
+        "W1,4",
+        "H",
+    ],
+)
+def test_parse_norm_rejects_unknown_names(name):
+    with pytest.raises(UnknownNormError):
+        parse_norm(name)
+
+
+def test_unknown_norm_error_is_a_value_error_naming_the_norm():
+    assert issubclass(UnknownNormError, ValueError)
+    f = field(Linear(0, 1, 0))
+    with pytest.raises(UnknownNormError, match="foo"):
+        compute_norms(f, ["L4", "foo"])
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "L1",
+        "L2",
+        "L2.5",
+        "L4",
+        "L16",
+        "Linf",
+        "L4plus",
+        "L4minus",
+        "Linfplus",
+        "W11",
+        "W14",
+        "W116",
+        "W12.5",
+        "W1inf",
+        "H1",
+        "H12",
+        "L2boundary",
+    ],
+)
+def test_parse_norm_accepts_known_names(name):
+    f = field(TILTED, N=4)
+    value = parse_norm(name)(f)
+    assert np.isfinite(value) and value >= 0.0
+
+
+def test_compute_norms_returns_every_requested_name():
+    f = field(TILTED, N=4)
+    norms = compute_norms(f, PAPER_NORMS)
+    assert list(norms) == PAPER_NORMS
+    for name in PAPER_NORMS:
+        assert norms[name] == parse_norm(name)(f)
+
+
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        dict(quadrature="gauss"),
+        dict(w1p_form="sum"),
+        dict(linf_points="nodes"),
+        dict(w1inf_points="everywhere"),
+        dict(h12_form="exact"),
+    ],
+)
+def test_conventions_reject_unknown_options(kwargs):
+    with pytest.raises(ValueError):
+        Conventions(**kwargs)
+
+
+def test_conventions_as_dict_names_every_choice():
+    d = Conventions().as_dict()
+    assert set(d) == {"quadrature", "w1p_form", "linf_points", "w1inf_points", "h12_form"}
+    assert d["quadrature"] in QUADRATURES and d["w1p_form"] in W1P_FORMS and d["h12_form"] in H12_FORMS
+
+
+# ---------------------------------------------------------------------------------
+# quadrature rules
+# ---------------------------------------------------------------------------------
+
+
+def triangle_moment(a: int, b: int) -> float:
+    """∫ x^a y^b over the reference triangle (0,0), (1,0), (0,1)."""
+    return math.factorial(a) * math.factorial(b) / math.factorial(a + b + 2)
+
+
+def test_dunavant8_has_16_points_and_degree_exactly_8():
+    X, W = dunavant8()
+    assert X.shape == (2, 16) and W.shape == (16,)
+    assert np.all(W > 0) and W.sum() == pytest.approx(0.5, rel=1e-14)
+    assert np.all(X >= 0) and np.all(X.sum(axis=0) <= 1)
+    for d in range(9):
+        for a in range(d + 1):
+            assert W @ (X[0] ** a * X[1] ** (d - a)) == pytest.approx(triangle_moment(a, d - a), rel=1e-13, abs=1e-16)
+    assert abs(W @ X[0] ** 9 - triangle_moment(9, 0)) > 1e-9
+
+
+@pytest.mark.parametrize("vertices", [[(0, 0), (1, 0), (0, 1)], [(0.2, 0.1), (0.7, 0.3), (0.1, 0.9)]])
+def test_stroud_conical_rule_has_degree_7(vertices):
+    """∫_T g ≈ |T| Σ w g(v1 + s (v2 − v1) + s t (v3 − v2)), exact to degree 7 (4 × 4 points)."""
+    s, t, w = stroud_conical(4)
+    assert s.size == 16 and w.sum() == pytest.approx(1.0, rel=1e-14)
+    v1, v2, v3 = (np.array(v, float) for v in vertices)
+    x = v1[:, None] + s * (v2 - v1)[:, None] + s * t * (v3 - v2)[:, None]
+    e1, e2 = v2 - v1, v3 - v1
+    area = 0.5 * abs(e1[0] * e2[1] - e1[1] * e2[0])
+    # reference moments on T by a fine Dunavant-free route: a collapsed 12×12 Gauss tensor rule
+    gs, gw = leggauss(12)
+    gs, gw = (gs + 1) / 2, gw / 2
+    S, T = np.meshgrid(gs, gs, indexing="ij")
+    Wt = np.outer(gw, gw) * S * 2  # Jacobian of the collapse, normalised so that Σ = 1
+    Xr = v1[:, None, None] + S * (v2 - v1)[:, None, None] + S * T * (v3 - v2)[:, None, None]
+    worst8 = 0.0
+    for d in range(9):
+        for a in range(d + 1):
+            exact = area * np.sum(Wt * Xr[0] ** a * Xr[1] ** (d - a))
+            approx = area * np.sum(w * x[0] ** a * x[1] ** (d - a))
+            if d <= 7:
+                assert approx == pytest.approx(exact, rel=1e-13, abs=1e-16), (a, d - a)
+            else:
+                worst8 = max(worst8, abs(approx - exact) / abs(exact))
+    assert worst8 > 1e-10, "degree 7, not 8"
+
+
+@pytest.mark.parametrize("n", [1, 3, 8])
+def test_gauss_legendre_01(n):
+    x, w = gauss_legendre_01(n)
+    assert np.all((x > 0) & (x < 1)) and w.sum() == pytest.approx(1.0, rel=1e-14)
+    for k in range(2 * n):
+        assert w @ x**k == pytest.approx(1.0 / (k + 1), rel=1e-13)
+
+
+# ---------------------------------------------------------------------------------
+# lazy evaluation: error_field(..., norms=[...]) computes only what those norms need
+# ---------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", PAPER_NORMS + ["L4plus", "Linfminus", "H1", "L2boundary"])
+def test_partial_error_field_gives_the_same_norm(name):
+    mesh = friedrichs_keller(9)
+    uh = 0.5 * mesh.p[0] ** 2
+    full = error_field(TILTED, mesh, uh)
+    part = error_field(TILTED, mesh, uh, norms=[name])
+    assert compute_norms(part, [name])[name] == compute_norms(full, [name])[name]
+
+
+def test_partial_error_field_rejects_unknown_names():
+    mesh = friedrichs_keller(3)
+    with pytest.raises(UnknownNormError):
+        error_field(TILTED, mesh, np.zeros(mesh.p.shape[1]), norms=["L4", "W1infplus"])

@@ -1,0 +1,370 @@
+"""The solvers of the discrete Signorini QP: the exact active-set solver, every installed
+cvxpy QP solver as an independent cross-check, the KKT certificate, the named errors,
+warm starts and the dispatcher."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from signorini import Problem
+from signorini.discrete import build, solve_discrete
+from signorini.solvers import (
+    SOLVERS,
+    BadInputError,
+    KKTError,
+    NotConvergedError,
+    active_set_solve,
+    cvxpy_solve,
+    installed_qp_solvers,
+    kkt_certificate,
+    solve,
+)
+from signorini.solvers.linalg import backend_name, factorize
+
+
+def _expected_qp_solvers() -> list[str]:
+    """cvxpy's installed QP-capable solvers, computed independently of the package."""
+    import cvxpy as cp
+    from cvxpy.reductions.solvers.defines import QP_SOLVERS
+
+    return sorted(s for s in cp.installed_solvers() if s in set(QP_SOLVERS) | {"CLARABEL", "SCS"})
+
+
+QP_SOLVER_NAMES = _expected_qp_solvers()
+
+# Tight settings per solver, found by experiment on the SMALL_CASES meshes, and the
+# relative max-norm agreement with the exact active-set solution each must reach.
+# OSQP polishes onto the exact active set; HiGHS' QP solver is an active-set method too
+# once its default Hessian regularisation (1e-7) is switched off.  The interior-point
+# CLARABEL resolves the degenerate boundary nodes (u = λ = 0) to ~tol^{1/2}: at tol =
+# 1e-12 it misses 1e-6 on one case (2.6e-6), at 1e-13 the worst case is ~5e-7.
+TIGHT = {
+    "OSQP": (dict(tol=1e-12), 1e-8),  # the package turns polishing on by default
+    "HIGHS": (
+        dict(qp_regularization_value=0.0, dual_feasibility_tolerance=1e-10, primal_feasibility_tolerance=1e-10),
+        1e-8,
+    ),
+    "CLARABEL": (dict(tol=1e-13), 1e-6),
+    "SCS": (dict(tol=1e-12), 1e-6),
+}
+# each solver's iteration-limit option, for the truncated solves
+ITERATION_LIMIT = {"OSQP": "max_iter", "CLARABEL": "max_iter", "SCS": "max_iters", "HIGHS": "qp_iteration_limit"}
+
+
+def rel_max_diff(u: np.ndarray, v: np.ndarray) -> float:
+    return float(np.abs(u - v).max() / np.abs(v).max())
+
+
+def check_kkt_independently(A, b, B, u, lam, tol=1e-10):
+    """The KKT conditions recomputed here, not through ``kkt_certificate``."""
+    r = A @ u - b
+    scale = max(np.abs(A @ u).max(), np.abs(b).max())
+    free = np.setdiff1d(np.arange(b.size), B)
+    assert np.abs(r[free]).max() <= tol * scale, "stationarity at free nodes"
+    assert np.abs(r[B] - lam).max() <= tol * scale, "λ = (A u − b)_B"
+    assert u[B].min() >= -tol * np.abs(u).max(), "u_B ≥ 0"
+    assert lam.min() >= -tol * scale, "λ ≥ 0"
+    assert np.abs(u[B] * lam).max() <= tol * np.abs(u).max() * scale, "complementarity"
+
+
+# ---------------------------------------------------------------------------------
+# the exact solver
+# ---------------------------------------------------------------------------------
+
+
+def test_active_set_solution_satisfies_kkt(small_case):
+    disc, res = small_case
+    assert res.solver == "active_set" and res.certificate.ok
+    assert res.certificate.worst <= 1e-10
+    assert res.u.shape == disc.b.shape and res.lam.shape == disc.boundary.shape
+    check_kkt_independently(disc.A, disc.b, disc.boundary, res.u, res.lam)
+    # the contact set: boundary nodes, clamped to exactly zero
+    assert np.all(np.isin(res.active, disc.boundary))
+    assert np.all(res.u[res.active] == 0.0)
+    assert res.iterations >= 1 and res.wall_time_s > 0.0
+    json.dumps(res.summary())  # JSON-ready diagnostics
+
+
+def test_active_set_solution_is_the_qp_minimiser(small_case):
+    """No feasible perturbation lowers ½uᵀAu − bᵀu (first- and second-order check)."""
+    disc, res = small_case
+    A, b, B, u = disc.A, disc.b, disc.boundary, res.u
+    J = lambda v: 0.5 * v @ (A @ v) - b @ v  # noqa: E731
+    rng = np.random.default_rng(1)
+    for _ in range(20):
+        d = rng.normal(size=u.size)
+        d[B] = np.abs(d[B])  # feasible directions at contact nodes point inwards
+        for t in (1e-3, 1e-6):
+            v = u + t * d * np.abs(u).max()
+            assert J(v) >= J(u) - 1e-14 * abs(J(u))
+
+
+def test_discrete_contact_set_resembles_the_continuous_one(cache):
+    """On the bottom edge u_h > 0 well inside (x0 − R, x0) and u_h = 0 well inside (x0, x0 + R)."""
+    disc, res = cache.discrete({}, 21), cache.solution({}, 21)
+    x, y = disc.mesh.p
+    bottom = disc.boundary[np.isclose(y[disc.boundary], 0.0)]
+    lifted = bottom[(x[bottom] > 0.15) & (x[bottom] < 0.4)]
+    contact = bottom[(x[bottom] > 0.6) & (x[bottom] < 0.9)]
+    assert np.all(res.u[lifted] > 0.0)
+    assert np.all(res.u[contact] == 0.0) and np.all(np.isin(contact, res.active))
+
+
+# ---------------------------------------------------------------------------------
+# cvxpy cross-checks
+# ---------------------------------------------------------------------------------
+
+
+def test_installed_qp_solvers():
+    assert installed_qp_solvers() == QP_SOLVER_NAMES
+    assert "CLARABEL" in QP_SOLVER_NAMES and "OSQP" in QP_SOLVER_NAMES
+
+
+@pytest.mark.parametrize("qp_solver", QP_SOLVER_NAMES)
+def test_cvxpy_solvers_agree_with_active_set(small_case, qp_solver):
+    if qp_solver not in TIGHT:
+        pytest.skip(f"no tight settings known for {qp_solver}; add them to TIGHT")
+    disc, exact = small_case
+    options, bound = TIGHT[qp_solver]
+    res = cvxpy_solve(disc.A, disc.b, disc.boundary, solver=qp_solver, kkt_tol=1e-8, **options)
+    assert res.certificate.ok and res.certificate.worst <= 1e-8
+    assert res.solver == f"cvxpy_{qp_solver.lower()}"
+    if qp_solver == "OSQP":
+        assert res.info["options"].get("polish", res.info["options"].get("polishing")) == "True"
+    assert rel_max_diff(res.u, exact.u) <= bound
+    check_kkt_independently(disc.A, disc.b, disc.boundary, res.u, res.lam, tol=1e-8)
+    json.dumps(res.summary())
+
+
+@pytest.mark.parametrize("qp_solver", QP_SOLVER_NAMES)
+def test_truncated_cvxpy_solve_raises(cache, qp_solver):
+    if qp_solver not in ITERATION_LIMIT:
+        pytest.skip(f"iteration-limit option of {qp_solver} unknown")
+    disc = cache.discrete({}, 11)
+    with pytest.raises((NotConvergedError, KKTError)):
+        cvxpy_solve(disc.A, disc.b, disc.boundary, solver=qp_solver, **{ITERATION_LIMIT[qp_solver]: 2})
+
+
+def test_cvxpy_solution_missing_its_certificate_raises_kkt_error(cache):
+    disc = cache.discrete({}, 11)
+    with pytest.raises(KKTError) as info:
+        cvxpy_solve(disc.A, disc.b, disc.boundary, solver="CLARABEL", kkt_tol=1e-30)
+    assert info.value.certificate.worst > 1e-30
+    # ... and with check=False the (good) solution comes back with its failed certificate
+    res = cvxpy_solve(disc.A, disc.b, disc.boundary, solver="CLARABEL", kkt_tol=1e-30, check=False)
+    assert not res.certificate.ok
+
+
+def test_unknown_cvxpy_solver_name_raises_value_error(cache):
+    disc = cache.discrete({}, 11)
+    with pytest.raises(ValueError, match="NOSUCHSOLVER"):
+        cvxpy_solve(disc.A, disc.b, disc.boundary, solver="nosuchsolver")
+    with pytest.raises(ValueError, match="NOSUCHSOLVER"):
+        solve("cvxpy_nosuchsolver", disc.A, disc.b, disc.boundary)
+
+
+def test_dispatcher_routes(cache):
+    disc, exact = cache.discrete({}, 11), cache.solution({}, 11)
+    assert SOLVERS == ("active_set", "cvxpy")
+    r1 = solve("active_set", disc.A, disc.b, disc.boundary)
+    r2 = solve("cvxpy", disc.A, disc.b, disc.boundary, qp_solver="OSQP", tol=1e-12, warm_start=exact.u)
+    r3 = solve("cvxpy_osqp", disc.A, disc.b, disc.boundary, tol=1e-12, warm_start=exact.u)
+    r4 = solve_discrete(disc, "cvxpy", qp_solver="OSQP", tol=1e-12)
+    assert r1.solver == "active_set" and r2.solver == r3.solver == r4.solver == "cvxpy_osqp"
+    for r in (r1, r2, r3, r4):
+        assert rel_max_diff(r.u, exact.u) <= 1e-8
+
+
+def test_unknown_solver_name_raises_value_error_naming_it(cache):
+    disc = cache.discrete({}, 11)
+    with pytest.raises(ValueError, match="quadprog"):
+        solve("quadprog", disc.A, disc.b, disc.boundary)
+    with pytest.raises(ValueError, match="quadprog"):
+        solve_discrete(disc, "quadprog")
+
+
+# ---------------------------------------------------------------------------------
+# truncated solves, certificates, bad input
+# ---------------------------------------------------------------------------------
+
+
+def test_truncated_active_set_solve_raises(cache):
+    disc = cache.discrete({}, 11)
+    cold = active_set_solve(disc.A, disc.b, disc.boundary)
+    assert cold.iterations > 1, "precondition: the cold start needs more than one step"
+    with pytest.raises(NotConvergedError):
+        active_set_solve(disc.A, disc.b, disc.boundary, max_iter=1)
+    with pytest.raises(NotConvergedError):
+        solve_discrete(disc, warm_start=None, max_iter=1)
+
+
+def test_active_set_missing_its_certificate_raises_kkt_error_with_residuals(cache):
+    disc = cache.discrete({}, 11)
+    with pytest.raises(KKTError) as info:
+        active_set_solve(disc.A, disc.b, disc.boundary, kkt_tol=0.0)
+    cert = info.value.certificate
+    assert not cert.ok and cert.tol == 0.0 and cert.worst > 0.0
+    assert "stationarity" in str(info.value)
+
+
+def test_certificate_detects_perturbed_solutions(small_case):
+    disc, res = small_case
+    A, b, B, u, lam = disc.A, disc.b, disc.boundary, res.u, res.lam
+    assert kkt_certificate(A, b, B, u, lam, 1e-10).ok
+    scale = np.abs(u).max()
+    interior = np.setdiff1d(np.arange(u.size), B)
+
+    v = u.copy()
+    v[interior[interior.size // 2]] += 1e-6 * scale  # breaks stationarity
+    cert = kkt_certificate(A, b, B, v, lam, 1e-10)
+    assert not cert.ok and cert.stationarity > 1e-10
+
+    v = u.copy()
+    v[res.active[0]] = -1e-6 * scale  # infeasible
+    assert kkt_certificate(A, b, B, v, lam, 1e-10).primal > 1e-10
+
+    strong = np.argmax(lam)  # a node with a strictly positive multiplier
+    assert lam[strong] > 0
+    v = u.copy()
+    v[B[strong]] += 1e-6 * scale  # lifts a contact node: stationarity and complementarity break
+    cert = kkt_certificate(A, b, B, v, lam, 1e-10)
+    assert not cert.ok and cert.complementarity > 1e-10
+
+    cert = kkt_certificate(A, b, B, u, -lam, 1e-10)  # wrong sign of the multiplier
+    assert not cert.ok and cert.dual > 1e-10
+
+    assert not kkt_certificate(A, b, B, np.full_like(u, np.nan), lam, 1e-10).ok
+
+
+def test_certificate_is_scale_invariant(small_case):
+    disc, res = small_case
+    c1 = kkt_certificate(disc.A, disc.b, disc.boundary, res.u, res.lam, 1e-10)
+    c2 = kkt_certificate(disc.A, 1e5 * disc.b, disc.boundary, 1e5 * res.u, 1e5 * res.lam, 1e-10)
+    for name in ("stationarity", "primal", "dual", "complementarity"):
+        assert getattr(c2, name) == pytest.approx(getattr(c1, name), rel=1e-6, abs=1e-15)
+
+
+def _bad_inputs(disc):
+    A, b, B = disc.A, disc.b, disc.boundary
+    nan_b = b.copy()
+    nan_b[3] = np.nan
+    inf_A = A.copy().tolil()
+    inf_A[2, 2] = np.inf
+    neg = A.copy().tolil()
+    neg[5, 5] = -neg[5, 5]
+    zero = A.copy().tolil()
+    zero[5, 5] = 0.0
+    return {
+        "nan in b": (A, nan_b, B),
+        "inf in A": (inf_A.tocsr(), b, B),
+        "short b": (A, b[:-1], B),
+        "non-square A": (A[:, :-1], b, B),
+        "negative diagonal": (neg.tocsr(), b, B),
+        "zero diagonal": (zero.tocsr(), b, B),
+        "index out of range": (A, b, np.append(B, b.size)),
+        "negative index": (A, b, np.append(B, -1)),
+    }
+
+
+BAD_INPUT_NAMES = list(_bad_inputs(build(Problem(), 3)))
+
+
+@pytest.mark.parametrize("which", BAD_INPUT_NAMES)
+def test_active_set_rejects_bad_input(cache, which):
+    A, b, B = _bad_inputs(cache.discrete({}, 11))[which]
+    with pytest.raises(BadInputError):
+        active_set_solve(A, b, B)
+
+
+@pytest.mark.parametrize("which", BAD_INPUT_NAMES)
+def test_cvxpy_rejects_bad_input(cache, which):
+    A, b, B = _bad_inputs(cache.discrete({}, 11))[which]
+    with pytest.raises(BadInputError):
+        cvxpy_solve(A, b, B, solver="OSQP")
+
+
+def test_bad_input_error_is_a_value_error():
+    assert issubclass(BadInputError, ValueError)
+
+
+def test_bad_warm_start_raises(cache):
+    disc = cache.discrete({}, 11)
+    with pytest.raises(ValueError):
+        active_set_solve(disc.A, disc.b, disc.boundary, warm_start=np.zeros(disc.b.size - 1))
+    with pytest.raises(ValueError):
+        active_set_solve(disc.A, disc.b, disc.boundary, warm_start=np.full(disc.b.size, np.nan))
+    with pytest.raises(ValueError, match="warm start"):
+        solve_discrete(disc, warm_start="coarse")
+
+
+# ---------------------------------------------------------------------------------
+# warm starts
+# ---------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module", params=["sw_ne", "nw_se"])
+def cascade_pair(request):
+    """N = 101: large enough that the cascade really warm-starts (from N = 25)."""
+    disc = build(Problem(), 101, request.param)
+    return disc, solve_discrete(disc, warm_start="cascade"), solve_discrete(disc, warm_start=None)
+
+
+def test_cascade_warm_start_gives_the_cold_solution(cascade_pair):
+    disc, warm, cold = cascade_pair
+    assert rel_max_diff(warm.u, cold.u) <= 1e-12
+    np.testing.assert_array_equal(np.sort(warm.active), np.sort(cold.active))
+    assert warm.certificate.ok and cold.certificate.ok
+    check_kkt_independently(disc.A, disc.b, disc.boundary, warm.u, warm.lam)
+
+
+def test_cascade_warm_start_saves_factorisations(cascade_pair):
+    _, warm, cold = cascade_pair
+    assert warm.info["factorizations"] <= cold.info["factorizations"]
+    assert warm.iterations <= cold.iterations
+    assert warm.info["factorizations"] >= 1 and warm.info["triangular_solves"] >= warm.info["factorizations"]
+
+
+@pytest.mark.parametrize("start", ["exact", "perturbed", "zero"])
+def test_vector_warm_starts_converge_to_the_same_solution(cache, start):
+    disc, exact = cache.discrete({}, 21), cache.solution({}, 21)
+    w = {"exact": exact.u, "perturbed": exact.u + 1e-3 * np.sin(np.arange(exact.u.size)), "zero": 0 * exact.u}[start]
+    res = active_set_solve(disc.A, disc.b, disc.boundary, warm_start=w)
+    assert rel_max_diff(res.u, exact.u) <= 1e-12
+    if start == "exact":
+        assert res.iterations <= 2
+
+
+# ---------------------------------------------------------------------------------
+# sparse factorisation
+# ---------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("backend", ["auto", "superlu"])
+def test_factorize_solves_spd_systems(cache, backend):
+    A = sp.csc_matrix(cache.discrete({}, 21).A)
+    rng = np.random.default_rng(0)
+    y = rng.normal(size=A.shape[0])
+    solve_ = factorize(A, backend)
+    x = solve_(y)
+    np.testing.assert_allclose(x, spla.spsolve(A, y), rtol=0, atol=1e-12 * np.abs(x).max())
+    Y = rng.normal(size=(A.shape[0], 3))
+    X = np.column_stack([solve_(Y[:, k]) for k in range(3)])
+    np.testing.assert_allclose(A @ X, Y, atol=1e-10)
+
+
+def test_factorisation_backend_names():
+    assert backend_name("superlu") == "superlu"
+    assert backend_name("auto") in ("cholmod", "superlu")
+    with pytest.raises(ValueError):
+        backend_name("mumps")
+
+
+def test_active_set_with_superlu_backend_matches(cache):
+    disc, exact = cache.discrete({}, 21), cache.solution({}, 21)
+    res = active_set_solve(disc.A, disc.b, disc.boundary, backend="superlu")
+    assert rel_max_diff(res.u, exact.u) <= 1e-12
