@@ -168,8 +168,8 @@ def error_field(
             qmesh = mesh if role is None else _rolled_mesh(mesh, role)
             basis = CellBasis(qmesh, ElementTriP1(), quadrature=(X, W))
             uh = basis.interpolate(u_h)
-            x = basis.global_coordinates().value
-            cache["quadrature"] = (problem.u(x) - uh.value, problem.grad_u(x) - uh.grad)
+            x = np.asarray(basis.global_coordinates())
+            cache["quadrature"] = (problem.u(x) - np.asarray(uh), problem.grad_u(x) - uh.grad)
             cache["dx"] = basis.dx
         return (*cache["quadrature"], cache["dx"])
 
@@ -180,8 +180,8 @@ def error_field(
             pts = _element_points(mesh, which)
             mbasis = CellBasis(mesh, ElementTriP1(), quadrature=(pts, np.ones(pts.shape[1])))
             muh = mbasis.interpolate(u_h)
-            mx = mbasis.global_coordinates().value
-            pe, pde = problem.u(mx) - muh.value, problem.grad_u(mx) - muh.grad
+            mx = np.asarray(mbasis.global_coordinates())
+            pe, pde = problem.u(mx) - np.asarray(muh), problem.grad_u(mx) - muh.grad
             if which == "all":
                 e, de, _ = at_quadrature()
                 pe, pde = np.concatenate([pe, e], axis=-1), np.concatenate([pde, de], axis=-1)

@@ -44,6 +44,8 @@ class Problem:
                 f"support of u (disc of radius R={self.R} around ({self.x0}, 0)) must stay inside the "
                 "unit square: need R < x0 and x0 + R < 1"
             )
+        if self.A < 0.0:
+            raise ProblemParameterError(f"amplitude A={self.A} must be non-negative (A < 0 violates u ≥ 0)")
         if self.c < 0.0:
             raise ProblemParameterError(f"reaction coefficient c={self.c} must be non-negative")
 
@@ -53,8 +55,9 @@ class Problem:
     # --- the cut-off ψ(r) = 1 - S(r/R), S(s) = s⁵(126 - 420 s + 540 s² - 315 s³ + 70 s⁴) ---
     def psi(self, r: np.ndarray) -> np.ndarray:
         """ψ(r); the C⁴ degree-9 polynomial cut-off, zero for r ≥ R."""
-        s = np.clip(np.asarray(r, dtype=float) / self.R, 0.0, 1.0)
-        return 1.0 - s**5 * (126.0 + s * (-420.0 + s * (540.0 + s * (-315.0 + 70.0 * s))))
+        # ψ = 1 - S(s) = S(1 - s) by the symmetry of S; the second form is exactly 0 at s = 1
+        t = 1.0 - np.clip(np.asarray(r, dtype=float) / self.R, 0.0, 1.0)
+        return t**5 * (126.0 + t * (-420.0 + t * (540.0 + t * (-315.0 + 70.0 * t))))
 
     def dpsi(self, r: np.ndarray) -> np.ndarray:
         """ψ'(r) = -630 s⁴ (1 - s)⁴ / R."""

@@ -19,6 +19,7 @@ from signorini.solvers.result import SolveResult
 TOLERANCE_OPTIONS: dict[str, tuple[tuple[str, ...], float]] = {
     "CLARABEL": (("tol_gap_abs", "tol_gap_rel", "tol_feas", "tol_ktratio"), 1e-8),
     "OSQP": (("eps_abs", "eps_rel"), 1e-3),
+    "HIGHS": (("primal_feasibility_tolerance", "dual_feasibility_tolerance"), 1e-7),
     "SCS": (("eps_abs", "eps_rel"), 1e-4),
     "PIQP": (("eps_abs", "eps_rel"), 1e-8),
     "PROXQP": (("eps_abs",), 1e-9),
@@ -67,7 +68,13 @@ def cvxpy_solve(
             raise ValueError(f"no tolerance mapping for solver {solver!r}; pass its options explicitly")
         options.update({name: tol for name in names})
     if solver == "OSQP":
-        options.setdefault("polish", True)
+        options.setdefault("polishing", options.pop("polish", True))
+    if solver == "HIGHS":
+        # HiGHS regularises QPs by default, which biases the answer by ~1e-7
+        options.setdefault("qp_regularization_value", 0.0)
+        for name in TOLERANCE_OPTIONS["HIGHS"][0]:
+            if name in options:
+                options[name] = max(float(options[name]), 1e-10)  # HiGHS rejects smaller values
 
     t0 = time.perf_counter()
     u = cp.Variable(b.size)
