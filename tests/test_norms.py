@@ -440,3 +440,41 @@ def test_partial_error_field_rejects_unknown_names():
     mesh = friedrichs_keller(3)
     with pytest.raises(UnknownNormError):
         error_field(TILTED, mesh, np.zeros(mesh.p.shape[1]), norms=["L4", "W1infplus"])
+
+
+def test_p1_at_points_matches_scikit_fem_interpolation():
+    """The written-out affine P1 evaluation agrees with scikit-fem's CellBasis."""
+    from skfem import CellBasis, ElementTriP1
+
+    from signorini.mesh import friedrichs_keller
+    from signorini.norms import p1_at_points
+    from signorini.quadrature import dunavant8
+
+    for diagonal in ("sw_ne", "nw_se"):
+        mesh = friedrichs_keller(7, diagonal, jitter=0.2)
+        u_h = np.sin(3 * mesh.p[0]) * np.cos(2 * mesh.p[1])
+        X, W = dunavant8()
+        basis = CellBasis(mesh, ElementTriP1(), quadrature=(X, W))
+        field = basis.interpolate(u_h)
+        x, value, grad, det = p1_at_points(mesh.p, mesh.t, u_h, X)
+        np.testing.assert_allclose(x, np.asarray(basis.global_coordinates()), atol=1e-14)
+        np.testing.assert_allclose(value, np.asarray(field), atol=1e-13)
+        np.testing.assert_allclose(np.broadcast_to(grad, field.grad.shape), field.grad, atol=1e-12)
+        np.testing.assert_allclose(det[:, None] * W[None, :], basis.dx, atol=1e-15)
+
+
+@pytest.mark.parametrize("chunk", [1, 7, 50, 10**6])
+def test_chunked_evaluation_equals_whole_field(chunk):
+    """evaluate_norms over chunks of triangles gives the single-pass values."""
+    from signorini import Problem
+    from signorini.discrete import build, solve_discrete
+    from signorini.norms import evaluate_norms
+
+    problem = Problem()
+    disc = build(problem, 9)
+    u_h = solve_discrete(disc).u
+    names = ["L4", "L16", "Linf", "W14", "W1inf", "H1", "H12", "L4plus", "Linfminus"]
+    whole = compute_norms(error_field(problem, disc.mesh, u_h), names)
+    chunked = evaluate_norms(problem, disc.mesh, u_h, names, chunk=chunk)
+    for name in names:
+        assert chunked[name] == pytest.approx(whole[name], rel=1e-12), name

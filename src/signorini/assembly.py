@@ -10,6 +10,8 @@ import numpy as np
 import scipy.sparse as sp
 from skfem import Basis, BilinearForm, ElementTriP1, LinearForm, MeshTri
 from skfem.helpers import dot, grad
+from skfem.quadrature import get_quadrature
+from skfem.refdom import RefTri
 
 from signorini.problem import Problem
 
@@ -45,17 +47,32 @@ def system_matrix(basis: Basis, c: float) -> sp.csr_matrix:
     return A
 
 
-def load_vector(basis: Basis, problem: Problem) -> np.ndarray:
-    """b_i = ∫ f φ_i with the basis' quadrature rule."""
+CHUNK_ELEMENTS = 1 << 17  # triangles per assembly chunk: bounds the quadrature data to ~0.5 GiB
+
+
+def load_vector(target: Basis | MeshTri, problem: Problem, chunk: int = CHUNK_ELEMENTS) -> np.ndarray:
+    """b_i = ∫ f φ_i, assembled over chunks of triangles.
+
+    ``target`` is a P1 basis (its quadrature rule is used) or a mesh (the package's
+    degree-8 rule); chunking keeps the 16-point quadrature data of N = 2001 in memory.
+    """
 
     @LinearForm
     def _load(v, w):
         return problem.f(w.x) * v
 
-    return _load.assemble(basis)
+    if isinstance(target, Basis):
+        mesh, quadrature = target.mesh, target.quadrature
+    else:
+        mesh, quadrature = target, get_quadrature(RefTri, INTORDER)
+    n_el = mesh.t.shape[1]
+    b = np.zeros(mesh.p.shape[1])
+    for start in range(0, n_el, chunk):
+        elements = np.arange(start, min(n_el, start + chunk))
+        b += _load.assemble(Basis(mesh, ElementTriP1(), quadrature=quadrature, elements=elements))
+    return b
 
 
 def assemble(mesh: MeshTri, problem: Problem) -> tuple[sp.csr_matrix, np.ndarray]:
     """(A, b) for -Δu + c u = f on ``mesh``."""
-    basis = p1_basis(mesh)
-    return system_matrix(basis, problem.c), load_vector(basis, problem)
+    return system_matrix(p1_basis(mesh, intorder=2), problem.c), load_vector(mesh, problem)
