@@ -6,13 +6,14 @@ indicator of F; then ``λ = (A u - b)_𝒜`` and the next set is
 ``{i ∈ 𝒜 : λ_i > -ε_λ} ∪ {i ∈ B \\ 𝒜 : u_i < -ε_u}`` with relative thresholds ε (scale-free).
 The iteration stops when the set repeats.
 
-Linear algebra: the first system is factorised (CHOLMOD); a later set that
+Linear algebra: the first system is factorised (PARDISO or CHOLMOD, see linalg.py); a later set that
 differs from the factorised one in ``k`` nodes changes ``Ã`` by a rank ≤ 2k
 term, so preconditioned CG with the old factor converges in ≤ 2k + 1 steps.
 Only a large change (more than ``refactor_above`` nodes) triggers a new
 factorisation.  A warm start (e.g. a coarser solution interpolated) gives the
 first active set, so a fine solve typically costs one factorisation plus a few
-dozen triangular solves.
+dozen triangular solves.  All clamped matrices keep ``A``'s sparsity pattern, so PARDISO
+analyses the pattern once and later factorisations are numerical only.
 """
 
 from __future__ import annotations
@@ -24,17 +25,19 @@ import numpy as np
 import scipy.sparse as sp
 
 from signorini.solvers.certificate import KKTError, NotConvergedError, check_qp_data, kkt_certificate
-from signorini.solvers.linalg import factorize
+from signorini.solvers.linalg import Factorizer
 from signorini.solvers.result import SolveResult
 
 log = logging.getLogger(__name__)
 
 
-def _clamped_matrix(A: sp.csr_matrix, free: np.ndarray) -> sp.csr_matrix:
-    """Ã = D A D + (I - D) for the free-node indicator D."""
-    d = free.astype(float)
-    D = sp.diags(d)
-    return (D @ A @ D + sp.diags(1.0 - d)).tocsc()
+def _clamped_values(A: sp.csr_matrix, rows: np.ndarray, free: np.ndarray) -> np.ndarray:
+    """CSR values of Ã = D A D + (I - D) in ``A``'s own sparsity pattern (explicit zeros kept,
+    so every active set shares one symbolic factorisation)."""
+    cols = A.indices
+    data = np.where(free[rows] & free[cols], A.data, 0.0)
+    data[(rows == cols) & ~free[rows]] = 1.0
+    return data
 
 
 def _pcg(matvec, rhs: np.ndarray, precond, x0: np.ndarray, rtol: float, maxiter: int) -> tuple[np.ndarray, int, float]:
@@ -83,7 +86,9 @@ def active_set_solve(
     Newton steps or cycles, and ``KKTError`` when the final certificate exceeds ``kkt_tol``.
     """
     t0 = time.perf_counter()
-    A = sp.csr_matrix(A)
+    A = sp.csr_matrix(A, copy=True)
+    A.sum_duplicates()
+    A.sort_indices()
     b = np.asarray(b, dtype=float)
     B = np.asarray(constrained, dtype=np.int64)
     check_qp_data(A, b, B)
@@ -108,6 +113,8 @@ def active_set_solve(
     else:
         active = b[B] <= 0.0  # nodes pushed outwards start in contact
 
+    rows = np.repeat(np.arange(n), np.diff(A.indptr))
+    factorizer = Factorizer(A, backend)
     factor_free = None  # free-indicator of the factorised matrix
     factor = None
     n_factor = n_solves = n_cg = 0
@@ -119,10 +126,11 @@ def active_set_solve(
         free = np.ones(n, dtype=bool)
         free[B[active]] = False
         rhs = np.where(free, b, 0.0)
-        Ac = _clamped_matrix(A, free)
+        values = _clamped_values(A, rows, free)
+        Ac = sp.csr_matrix((values, A.indices, A.indptr), shape=A.shape)
         changed = n if factor_free is None else int(np.count_nonzero(free != factor_free))
         if factor is None or changed > refactor_above:
-            factor, factor_free = factorize(Ac, backend), free
+            factor, factor_free = factorizer(values), free
             u = factor(rhs)
             n_factor += 1
             n_solves += 1
@@ -132,7 +140,7 @@ def active_set_solve(
             n_cg += k
             if rel > cg_rtol:  # stagnation: fall back to a fresh factorisation
                 log.info("PCG stagnated at relative residual %.1e; refactorising", rel)
-                factor, factor_free = factorize(Ac, backend), free
+                factor, factor_free = factorizer(values), free
                 u = factor(rhs)
                 n_factor += 1
                 n_solves += 1
@@ -183,7 +191,12 @@ def active_set_solve(
         wall_time_s=wall,
         certificate=cert,
         solver="active_set",
-        info={"factorizations": n_factor, "triangular_solves": n_solves, "cg_iterations": n_cg},
+        info={
+            "factorizations": n_factor,
+            "triangular_solves": n_solves,
+            "cg_iterations": n_cg,
+            "backend": factorizer.backend,
+        },
     )
     if not cert.ok:
         raise KKTError("active_set solution fails its KKT certificate", cert)

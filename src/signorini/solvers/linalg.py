@@ -1,12 +1,22 @@
 """Sparse symmetric positive definite factorisations.
 
-CHOLMOD through ``cholespy`` (wheels on PyPI, no system libraries) when it is
-installed; otherwise SciPy's SuperLU, with a logged notice, since SuperLU is
-about 2–3× slower on these 2D Laplace-type matrices.
+Backends, in the order ``prefer="auto"`` tries them:
+
+- ``cholmod``: CHOLMOD through ``cholespy`` (wheels on PyPI, bundles its BLAS);
+  fast triangular solves, which the active-set loop's PCG steps are made of;
+- ``pardiso``: MKL PARDISO through ``pypardiso`` (wheels), real SPD mode; a
+  ``Factorizer`` analyses the sparsity pattern once and refactorises numerically
+  only.  Fastest factorisation at N = 501 but slow solves and a large fixed cost
+  per call on small meshes;
+- ``superlu``: SciPy's SuperLU in symmetric mode, always available; a logged
+  notice says when the faster backends are missing.
+
+Measured figures are in ``results/benchmarks/`` (``benchmarks/core.py``).
 """
 
 from __future__ import annotations
 
+import importlib.util
 import logging
 from collections.abc import Callable
 
@@ -16,53 +26,113 @@ import scipy.sparse.linalg as spla
 
 log = logging.getLogger(__name__)
 
-try:  # pragma: no cover - exercised implicitly by whichever branch is installed
-    from cholespy import CholeskySolverD, MatrixType
-
-    HAVE_CHOLESPY = True
-except ImportError:  # pragma: no cover
-    HAVE_CHOLESPY = False
-
+BACKENDS = ("cholmod", "pardiso", "superlu")
+_MODULES = {"pardiso": "pypardiso", "cholmod": "cholespy"}
 _notice_given = False
 
 Solve = Callable[[np.ndarray], np.ndarray]
 
 
+def available_backends() -> list[str]:
+    """The installed factorisation backends, fastest first."""
+    return [b for b in BACKENDS if b == "superlu" or importlib.util.find_spec(_MODULES[b]) is not None]
+
+
 def backend_name(prefer: str = "auto") -> str:
     """The factorisation backend that ``factorize`` uses for ``prefer``."""
-    if prefer not in ("auto", "cholmod", "superlu"):
-        raise ValueError(f"unknown factorisation backend {prefer!r}; choose auto, cholmod or superlu")
-    if prefer == "superlu" or not HAVE_CHOLESPY:
-        if prefer == "cholmod":
-            raise RuntimeError("backend 'cholmod' requested but cholespy is not installed")
-        return "superlu"
-    return "cholmod"
+    global _notice_given
+    if prefer not in ("auto", *BACKENDS):
+        raise ValueError(f"unknown factorisation backend {prefer!r}; choose auto or one of {BACKENDS}")
+    installed = available_backends()
+    if prefer == "auto":
+        if installed[0] == "superlu" and not _notice_given:
+            log.warning("neither cholespy nor pypardiso is installed: using SciPy's SuperLU")
+            _notice_given = True
+        return installed[0]
+    if prefer not in installed:
+        raise RuntimeError(f"factorisation backend {prefer!r} requested but {_MODULES[prefer]} is not installed")
+    return prefer
+
+
+class Factorizer:
+    """Repeated factorisations of SPD matrices with the sparsity pattern of ``pattern``.
+
+    ``factorizer(data)`` factorises the matrix whose CSR values (in ``pattern``'s
+    order) are ``data`` and returns ``x = solve(y)`` for vectors or (n, k) blocks.
+    Only the last factorisation stays valid for the PARDISO backend.
+    """
+
+    def __init__(self, pattern: sp.spmatrix, prefer: str = "auto"):
+        self.backend = backend_name(prefer)
+        self.pattern = sp.csr_matrix(pattern, copy=True)
+        self.pattern.sum_duplicates()
+        self.pattern.sort_indices()
+        self.n = self.pattern.shape[0]
+        if self.backend == "pardiso":
+            import pypardiso
+
+            rows = np.repeat(np.arange(self.n), np.diff(self.pattern.indptr))
+            self._upper = self.pattern.indices >= rows  # PARDISO's SPD mode reads the upper triangle
+            upper = sp.csr_matrix(
+                (self.pattern.data[self._upper], self.pattern.indices[self._upper], _indptr(rows[self._upper], self.n)),
+                shape=self.pattern.shape,
+            )
+            self._matrix = upper
+            self._solver = pypardiso.PyPardisoSolver(mtype=2)
+            self._analysed = False
+
+    def __call__(self, data: np.ndarray) -> Solve:
+        data = np.asarray(data, dtype=float)
+        if self.backend == "pardiso":
+            return self._pardiso(data)
+        A = sp.csr_matrix((data, self.pattern.indices, self.pattern.indptr), shape=self.pattern.shape).tocsc()
+        if self.backend == "cholmod":
+            from cholespy import CholeskySolverD, MatrixType
+
+            factor = CholeskySolverD(
+                self.n,
+                A.indptr.astype(np.int32),
+                A.indices.astype(np.int32),
+                np.ascontiguousarray(A.data),
+                MatrixType.CSC,
+            )
+
+            def solve(y: np.ndarray) -> np.ndarray:
+                y = np.ascontiguousarray(y, dtype=float)
+                x = np.empty_like(y)
+                factor.solve(y, x)
+                return x
+
+            return solve
+        lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+        return lambda y: lu.solve(np.asarray(y, dtype=float))
+
+    def _pardiso(self, data: np.ndarray) -> Solve:
+        solver, A = self._solver, self._matrix
+        A.data = np.ascontiguousarray(data[self._upper])
+        dummy = np.zeros((self.n, 1), order="F")
+        if not self._analysed:  # symbolic analysis (ordering) once per pattern
+            solver.set_phase(11)
+            solver._call_pardiso(A, dummy)
+            self._analysed = True
+        solver.set_phase(22)  # numerical factorisation only
+        solver._call_pardiso(A, dummy)
+
+        def solve(y: np.ndarray) -> np.ndarray:
+            y = np.asarray(y, dtype=float)
+            solver.set_phase(33)
+            return solver._call_pardiso(A, np.asfortranarray(y)).reshape(y.shape)
+
+        return solve
+
+
+def _indptr(rows: np.ndarray, n: int) -> np.ndarray:
+    return np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n))]).astype(np.int32)
 
 
 def factorize(A: sp.spmatrix, prefer: str = "auto") -> Solve:
     """Factorise the SPD matrix ``A`` once; return ``x = solve(y)`` for vectors or (n, k) blocks."""
-    global _notice_given
-    backend = backend_name(prefer)
-    A = sp.csc_matrix(A)
-    n = A.shape[0]
-    if backend == "cholmod":
-        factor = CholeskySolverD(
-            n,
-            A.indptr.astype(np.int32),
-            A.indices.astype(np.int32),
-            np.ascontiguousarray(A.data, dtype=float),
-            MatrixType.CSC,
-        )
-
-        def solve(y: np.ndarray) -> np.ndarray:
-            y = np.ascontiguousarray(y, dtype=float)
-            x = np.empty_like(y)
-            factor.solve(y, x)
-            return x
-
-        return solve
-    if prefer == "auto" and not _notice_given:
-        log.warning("cholespy is not installed: falling back to SciPy's SuperLU (slower); pip install cholespy")
-        _notice_given = True
-    lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
-    return lambda y: lu.solve(np.asarray(y, dtype=float))
+    A = sp.csr_matrix(A)
+    A.sum_duplicates()
+    A.sort_indices()
+    return Factorizer(A, prefer)(A.data)
