@@ -1,6 +1,6 @@
 """Compare every combination of the paper's open conventions against its Table 1.
 
-    python benchmarks/conventions.py [--N 101 201 301 401 501] [--out paper_figures]
+    python benchmarks/conventions.py [--N 101 201 301 401 501] [--out docs/evidence]
 
 For each mesh direction the exact discrete solution is computed once (cached in
 results/conventions/), then every norm is evaluated under each option that can
@@ -72,7 +72,7 @@ def rows(problem: Problem, N: int, diagonal: str, cache: Path):
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--N", type=int, nargs="+", default=[101, 201, 301, 401, 501])
-    ap.add_argument("--out", type=Path, default=ROOT / "paper_figures")
+    ap.add_argument("--out", type=Path, default=ROOT / "docs/evidence")
     args = ap.parse_args()
     cache = ROOT / "results/conventions"
     problem = Problem()

@@ -1,6 +1,6 @@
 """How the Table 1 columns move when the QP is solved inexactly.
 
-    python benchmarks/qp_tolerance.py [--N 201] [--out paper_figures/qp_tolerance.csv]
+    python benchmarks/qp_tolerance.py [--N 201] [--out docs/evidence/qp_tolerance.csv]
 
 Solves (S_h) exactly (active set) and with cvxpy/OSQP at a sweep of tolerances
 (no polishing, as a generic QP code would return it), and reports each norm of
@@ -28,7 +28,7 @@ COLUMNS = ["L4", "Linf", "W14", "W1inf", "H12"]
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--N", type=int, default=201)
-    ap.add_argument("--out", type=Path, default=ROOT / "paper_figures/qp_tolerance.csv")
+    ap.add_argument("--out", type=Path, default=ROOT / "docs/evidence/qp_tolerance.csv")
     args = ap.parse_args()
     problem = Problem()
     disc = build(problem, args.N)

@@ -246,7 +246,8 @@ def test_certificate_is_scale_invariant(small_case):
     c1 = kkt_certificate(disc.A, disc.b, disc.boundary, res.u, res.lam, 1e-10)
     c2 = kkt_certificate(disc.A, 1e5 * disc.b, disc.boundary, 1e5 * res.u, 1e5 * res.lam, 1e-10)
     for name in ("stationarity", "primal", "dual", "complementarity"):
-        assert getattr(c2, name) == pytest.approx(getattr(c1, name), rel=1e-6, abs=1e-14)  # residuals at round-off level differ by a few ulps
+        # residuals at round-off level differ by a few ulps after scaling
+        assert getattr(c2, name) == pytest.approx(getattr(c1, name), rel=1e-6, abs=1e-14)
 
 
 def _bad_inputs(disc):

@@ -20,12 +20,15 @@ from __future__ import annotations
 
 import re
 from dataclasses import asdict, dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from skfem import MeshTri
 
 from signorini.problem import Problem
 from signorini.quadrature import dunavant8, gauss_legendre_01, stroud_conical
+
+if TYPE_CHECKING:  # scikit-fem costs 0.5 s to import; only type hints need it here
+    from skfem import MeshTri
 
 QUADRATURES = ("dunavant8", "stroud4_right", "stroud4_acute1", "stroud4_acute2")
 W1P_FORMS = ("components", "gradient", "seminorm")

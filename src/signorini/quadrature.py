@@ -11,15 +11,15 @@ of a Friedrichs–Keller triangle, in counter-clockwise order after the right an
 from __future__ import annotations
 
 import numpy as np
-from scipy.special import roots_jacobi, roots_legendre
-from skfem.quadrature import get_quadrature
-from skfem.refdom import RefTri
 
 TRIANGLE_RULES = ("dunavant8", "stroud4_right", "stroud4_acute1", "stroud4_acute2")
 
 
 def dunavant8() -> tuple[np.ndarray, np.ndarray]:
     """Reference points (2, 16) and weights (16,) (summing to 1/2) of scikit-fem's intorder=8 rule."""
+    from skfem.quadrature import get_quadrature  # imported here: the config check imports this module
+    from skfem.refdom import RefTri
+
     X, W = get_quadrature(RefTri, 8)
     return X, W
 
@@ -31,6 +31,8 @@ def stroud_conical(n: int = 4) -> tuple[np.ndarray, np.ndarray]:
     Jacobian, hence Gauss–Jacobi with weight ``s`` on [0, 1].  Weights sum to 1
     (multiply by twice the triangle area... by the area |T| · 2 · 1/2).
     """
+    from scipy.special import roots_jacobi, roots_legendre  # lazy: keeps the config check fast
+
     xj, wj = roots_jacobi(n, 0.0, 1.0)  # weight (1 + x) on [-1, 1]
     s, ws = (xj + 1.0) / 2.0, wj / 4.0  # ∫_0^1 s g(s) ds
     xl, wl = roots_legendre(n)
@@ -42,5 +44,7 @@ def stroud_conical(n: int = 4) -> tuple[np.ndarray, np.ndarray]:
 
 def gauss_legendre_01(n: int) -> tuple[np.ndarray, np.ndarray]:
     """n-point Gauss–Legendre rule on [0, 1] (the boundary line rule)."""
+    from scipy.special import roots_legendre
+
     x, w = roots_legendre(n)
     return (x + 1.0) / 2.0, w / 2.0

@@ -1,0 +1,8 @@
+"""rule eoc: results/<scene>/eoc.csv (EOCs and regression slope) from errors.csv."""
+
+from signorini.pipeline import eoc_table, job_log
+
+snakemake = globals()["snakemake"]  # injected by the script: directive
+
+with job_log(snakemake.log[0]):
+    eoc_table(snakemake.input.errors, snakemake.output[0])

@@ -1,0 +1,8 @@
+"""rule runtime: paper_figures/runtime.csv from the benchmark: files and in-job timers."""
+
+from signorini.pipeline import collect_runtime, job_log
+
+snakemake = globals()["snakemake"]  # injected by the script: directive
+
+with job_log(snakemake.log[0]):
+    collect_runtime(snakemake.params.jobs, snakemake.output[0])
