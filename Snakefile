@@ -22,6 +22,7 @@ include: "workflow/rules/common.smk"
 include: "workflow/rules/solve.smk"
 include: "workflow/rules/norms.smk"
 include: "workflow/rules/render.smk"
+include: "workflow/rules/theory.smk"
 
 
 rule all:

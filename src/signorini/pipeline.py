@@ -52,6 +52,8 @@ STAGE_MODULES: dict[str, tuple[str, ...]] = {
     "figures": (*_BASE, "mesh.py", "figures.py"),
     "reproduction": (*_BASE, "tables.py"),
     "runtime": _BASE,
+    "theory": (*_BASE, "mesh.py", "assembly.py", "quadrature.py", "theory.py", *SOLVER_MODULES),
+    "theory_report": (*_BASE, "mesh.py", "convergence.py", "theory.py", "theory_report.py"),
 }
 
 PATHS = {
@@ -61,6 +63,7 @@ PATHS = {
     "fields_npz": "results/{scene}/fields.npz",
     "errors_csv": "results/{scene}/errors.csv",
     "eoc_csv": "results/{scene}/eoc.csv",
+    "theory_json": "results/{scene}/N{N}/theory.json",
 }
 
 
@@ -313,6 +316,29 @@ def norm_stage(
             "note": "perf_counter timers inside the job: mesh = building the mesh, norm = error evaluation + reduction",
         },
     }
+    save_json(out_json, info)
+    return info
+
+
+def theory_stage(
+    problem_params: Mapping,
+    N: int,
+    solution_npz: str | os.PathLike,
+    out_json: str | os.PathLike,
+    diagonal: str = "sw_ne",
+) -> dict:
+    """Supercloseness, discrete H^{1/2}(∂Ω) norm and contact-set metrics of one solution."""
+    from signorini.mesh import friedrichs_keller, mesh_width
+    from signorini.theory import theory_quantities
+
+    problem = _problem(problem_params)
+    u_h = load_npz(solution_npz)["u"]
+    if u_h.shape != ((N + 1) ** 2,):
+        raise CorruptArtifactError(f"{solution_npz}: u has shape {u_h.shape}, expected ({(N + 1) ** 2},) for N={N}")
+    t0 = time.perf_counter()
+    values = theory_quantities(problem, friedrichs_keller(int(N), diagonal), u_h)
+    info = {"N": int(N), "h": mesh_width(int(N)), **values, "timings": {"theory_s": time.perf_counter() - t0}}
+    log.info("N=%d %s", N, {k: v for k, v in values.items() if k != "contact"})
     save_json(out_json, info)
     return info
 

@@ -1,0 +1,106 @@
+"""Issue 7: Ritz projection / supercloseness, discrete H^{1/2}(∂Ω) norm, contact set, expected
+rates, and the `theory` target run end to end on a small version of the scene."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import yaml
+
+from signorini import Problem
+from signorini.discrete import build, solve_discrete
+from signorini.mesh import friedrichs_keller
+from signorini.theory import (
+    boundary_h12_norm,
+    contact_set,
+    expected_rate,
+    h1_norm_p1,
+    ritz_projection,
+    supercloseness,
+)
+
+
+class _Linear:
+    """u = 1 + 2 x₁ - x₂ with reaction c: its Ritz projection is its interpolant."""
+
+    c = 1.5
+
+    def u(self, x):
+        return 1.0 + 2.0 * x[0] - x[1]
+
+    def grad_u(self, x):
+        return np.stack([2.0 * np.ones_like(x[0]), -np.ones_like(x[0])])
+
+
+def test_ritz_projection_reproduces_p1_functions():
+    mesh = friedrichs_keller(6)
+    r = ritz_projection(_Linear(), mesh)
+    np.testing.assert_allclose(r, _Linear().u(mesh.p), atol=1e-12)
+
+
+def test_h1_norm_of_p1_function_is_exact():
+    mesh = friedrichs_keller(5)
+    v = 1.0 + 2.0 * mesh.p[0] - mesh.p[1]
+    # ‖v‖² = ∫ v² + |∇v|² = ∫ (1 + 2x - y)² + 5 over the unit square
+    exact = np.sqrt(1 + 4 / 3 + 1 / 3 + 2 * 1 * 2 * 0.5 - 2 * 0.5 - 2 * 2 * 0.25 + 5)
+    assert h1_norm_p1(mesh, v) == pytest.approx(exact, rel=1e-12)
+
+
+def test_supercloseness_vanishes_for_the_ritz_projection():
+    problem = Problem()
+    mesh = friedrichs_keller(12)
+    assert supercloseness(problem, mesh, ritz_projection(problem, mesh)) < 1e-12
+
+
+class _BoundaryMode:
+    """u = cos(ω s) with s the arc length along ∂Ω (counter-clockwise from (0, 0)), ω = 2πk/4."""
+
+    def __init__(self, k: int):
+        self.omega = 2 * np.pi * k / 4.0
+
+    def u(self, x):
+        x1, x2 = x[0], x[1]
+        s = np.where(x2 <= 1e-12, x1, np.where(x1 >= 1 - 1e-12, 1 + x2, np.where(x2 >= 1 - 1e-12, 3 - x1, 4 - x2)))
+        return np.cos(self.omega * s)
+
+
+@pytest.mark.parametrize("k", [1, 3])
+def test_discrete_h12_norm_of_a_fourier_mode(k):
+    """‖cos(ωs)‖²_{H^{1/2}} = (1 + ω²)^{1/2} · L/2 on a closed curve of length L = 4."""
+    mode = _BoundaryMode(k)
+    mesh = friedrichs_keller(64)
+    value = boundary_h12_norm(mode, mesh, np.zeros(mesh.p.shape[1]), refine=2)
+    exact = np.sqrt(np.sqrt(1 + mode.omega**2) * 2.0)
+    assert value == pytest.approx(exact, rel=2e-3)
+
+
+def test_contact_set_of_the_default_problem():
+    problem = Problem()
+    disc = build(problem, 41)
+    u_h = solve_discrete(disc).u
+    c = contact_set(problem, disc.mesh, u_h)
+    assert c["n_contact_nodes"] == np.count_nonzero(u_h[disc.boundary] == 0.0)
+    assert 0.0 < c["free_point_offset"] <= 1.0 / 41  # first contact node right of x0
+    assert c["hausdorff_discrete_to_exact"] < 1e-3  # discrete contact ⊂ exact contact set
+
+
+def test_expected_rates():
+    assert expected_rate("L4") == 2.0 and expected_rate("L2") == 2.0
+    assert expected_rate("L16") == pytest.approx(1.625)
+    assert expected_rate("Linf") == 1.5 and expected_rate("W1inf") == 0.5
+    assert expected_rate("W116") == pytest.approx(0.625)
+    assert expected_rate("H12") is None
+
+
+def test_theory_target_end_to_end(tmp_path):
+    from test_pipeline import copy_repo, snakemake
+
+    repo = copy_repo(tmp_path)
+    small = {"scenes": {"theory": {"N": [9, 17, 33], "norms": ["L2", "L4", "L8", "Linf", "W12", "W14", "W1inf",
+                                                              "H1", "H12", "L4plus", "L4minus"]}}}
+    (repo / "small.yaml").write_text(yaml.safe_dump(small))
+    snakemake(repo, "-c2", "theory", "--configfile", "small.yaml")
+    md = (repo / "paper_figures/theory.md").read_text()
+    assert "Supercloseness" in md and "| L4 |" in md
+    for name in ("theory_rates.png", "theory_extra.png", "theory.csv"):
+        assert (repo / "paper_figures" / name).stat().st_size > 0
