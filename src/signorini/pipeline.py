@@ -54,6 +54,20 @@ STAGE_MODULES: dict[str, tuple[str, ...]] = {
     "runtime": _BASE,
     "theory": (*_BASE, "mesh.py", "assembly.py", "quadrature.py", "theory.py", *SOLVER_MODULES),
     "theory_report": (*_BASE, "mesh.py", "convergence.py", "theory.py", "theory_report.py"),
+    "work_precision_system": (*_BASE, "mesh.py", "assembly.py", "discrete.py", *SOLVER_MODULES, "work_precision.py"),
+    "work_precision_measure": (
+        *_BASE,
+        "mesh.py",
+        "assembly.py",
+        "discrete.py",
+        "quadrature.py",
+        "norms.py",
+        *SOLVER_MODULES,
+        "work_precision.py",
+    ),
+    "work_precision_table": (*_BASE, "work_precision.py"),
+    "work_precision_figures": (*_BASE, "work_precision.py", "figures.py"),
+    "work_precision_report": (*_BASE, "convergence.py", "tables.py", "work_precision.py"),
 }
 
 PATHS = {
@@ -275,6 +289,20 @@ def solve_stage(
     return info
 
 
+def load_solution(solution_npz: str | os.PathLike, N: int, diagonal: str = "sw_ne"):
+    """``u_h`` from a solve artifact, checked against the mesh it is used on.
+
+    Raises ``CorruptArtifactError`` for a truncated file, a wrong length or another diagonal.
+    """
+    sol = load_npz(solution_npz)
+    u_h = sol["u"]
+    if u_h.shape != ((N + 1) ** 2,):
+        raise CorruptArtifactError(f"{solution_npz}: u has shape {u_h.shape}, expected ({(N + 1) ** 2},) for N={N}")
+    if "diagonal" in sol and str(sol["diagonal"]) != diagonal:
+        raise CorruptArtifactError(f"{solution_npz}: solved with diagonal {sol['diagonal']}, not {diagonal}")
+    return u_h
+
+
 def norm_stage(
     problem_params: Mapping,
     N: int,
@@ -291,12 +319,7 @@ def norm_stage(
     parse_norm(norm)  # fail before any work on an unknown name
     problem = _problem(problem_params)
     conv = Conventions(**dict(conventions or {}))
-    sol = load_npz(solution_npz)  # CorruptArtifactError on a truncated file
-    u_h = sol["u"]
-    if u_h.shape != ((N + 1) ** 2,):
-        raise CorruptArtifactError(f"{solution_npz}: u has shape {u_h.shape}, expected ({(N + 1) ** 2},) for N={N}")
-    if "diagonal" in sol and str(sol["diagonal"]) != diagonal:
-        raise CorruptArtifactError(f"{solution_npz}: solved with diagonal {sol['diagonal']}, not {diagonal}")
+    u_h = load_solution(solution_npz, N, diagonal)
     t0 = time.perf_counter()
     mesh = friedrichs_keller(int(N), diagonal)
     t1 = time.perf_counter()
@@ -332,9 +355,7 @@ def theory_stage(
     from signorini.theory import theory_quantities
 
     problem = _problem(problem_params)
-    u_h = load_npz(solution_npz)["u"]
-    if u_h.shape != ((N + 1) ** 2,):
-        raise CorruptArtifactError(f"{solution_npz}: u has shape {u_h.shape}, expected ({(N + 1) ** 2},) for N={N}")
+    u_h = load_solution(solution_npz, N, diagonal)
     t0 = time.perf_counter()
     values = theory_quantities(problem, friedrichs_keller(int(N), diagonal), u_h)
     info = {"N": int(N), "h": mesh_width(int(N)), **values, "timings": {"theory_s": time.perf_counter() - t0}}
