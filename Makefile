@@ -33,7 +33,7 @@ lock:
 
 ## lint: ruff, snakemake --lint, snakefmt --check
 lint: setup
-	$(BIN)/ruff check src tests workflow benchmarks
+	$(BIN)/ruff check src tests workflow benchmarks notebooks
 	$(BIN)/snakemake --lint
 	$(BIN)/snakefmt --check Snakefile workflow
 

@@ -1,0 +1,141 @@
+# ---
+# jupyter:
+#   jupytext:
+#     formats: ipynb,py:percent
+#     text_representation:
+#       extension: .py
+#       format_name: percent
+#       format_version: '1.3'
+#       jupytext_version: 1.19.6
+#   kernelspec:
+#     display_name: Python 3 (ipykernel)
+#     language: python
+#     name: python3
+# ---
+
+# %% [markdown]
+# # 02 · Convergence: Tables 1–2 next to the paper, Figure 3, the EOCs, any `p`
+#
+# The pipeline's `results/<scene>/errors.csv` (one row per mesh, one column per norm of
+# `u − u_h`) and `eoc.csv` (`EOC_k = log(e_k/e_{k−1}) / log(h_k/h_{k−1})`, then the
+# least-squares slope), next to the published values transcribed in
+# `workflow/reference/paper_table{1,2}.csv`.
+#
+# Scene: `paper` if built (`make all`), else `smoke` (`N = 11, 21, 41`: coarser than any of
+# the paper's meshes, so its rows do not meet the paper's — the tables then show both sets of
+# rows, and only `regr.` and `theo.` can be compared; set `SIGNORINI_SCENE` to choose).
+
+# %%
+import math
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+from IPython.display import display
+
+from signorini import explore
+from signorini.figures import FIGURE3_LABELS, FIGURE3_NORMS, REFERENCE_SLOPES
+from signorini.tables import LABELS_MD, LABELS_TEX, THEORETICAL_ORDERS
+
+scene = explore.locate_scene()
+print(f"scene {scene.name!r} under {scene.dir}: N = {scene.Ns}, norms {scene.norms}")
+pd.set_option("display.width", 200)
+errors, eoc = scene.errors(), scene.eoc()
+display(errors)
+
+# %% [markdown]
+# ## Table 1: absolute errors, ours | paper | relative deviation in %
+
+# %%
+table1 = explore.side_by_side(scene, 1)
+table1.style.format("{:.4e}", subset=[c for c in table1.columns if c[1] != "dev. %"], na_rep="–").format(
+    "{:+.2f}", subset=[c for c in table1.columns if c[1] == "dev. %"], na_rep="–"
+)
+
+# %% [markdown]
+# ## Table 2: EOCs, ours | paper | relative deviation in %
+#
+# Rows are labelled by the finer mesh of each pair; `regr.` is the least-squares slope over
+# all meshes, `theo.` the expected order (minus ε).
+
+# %%
+table2 = explore.side_by_side(scene, 2)
+table2.style.format("{:.4f}", subset=[c for c in table2.columns if c[1] != "dev. %"], na_rep="–").format(
+    "{:+.2f}", subset=[c for c in table2.columns if c[1] == "dev. %"], na_rep="–"
+)
+
+# %% [markdown]
+# ## Figure 3: `L⁴` and `W^{1,4}` errors against `h`
+#
+# As `paper_figures/figure3.png` (`signorini.figures.figure3`): reference lines `h²` and `h`
+# through the coarsest point, halved; the paper's published values as crosses.
+
+# %%
+paper1 = explore.paper_reference(1, scene.root)
+paper_h = np.array([1.0 / int(lab[2:]) for lab in paper1.index])
+h = errors["h"].to_numpy()
+fig, ax = plt.subplots(figsize=(6.5, 4.8))
+for norm, marker in zip(FIGURE3_NORMS, "os", strict=True):
+    e = errors[norm].to_numpy()
+    (line,) = ax.loglog(h, e, marker=marker, label=f"{FIGURE3_LABELS[norm]} (ours, {scene.name})")
+    order = REFERENCE_SLOPES[norm]
+    ax.loglog(h, 0.5 * e[h.argmax()] * (h / h.max()) ** order, "--", color=line.get_color(), alpha=0.7,
+              label=f"$h^{{{order:g}}}$ (reference)")
+    ax.loglog(paper_h, paper1[norm], "x", color=line.get_color(), markersize=8, label=f"{norm} (paper, Table 1)")
+ax.set(xlabel="mesh width $h$", ylabel="error", title=r"$L^4$- and $W^{1,4}$-errors")
+ax.grid(True, which="both", linewidth=0.3, alpha=0.6)
+ax.legend(fontsize=8)
+plt.show()
+
+# %% [markdown]
+# ## Every norm of the scene: errors and EOCs
+#
+# Left: the errors against `h`. Right: the EOC of each mesh pair (plotted at the finer `h`)
+# with the expected order (dashed) and the regression slope (dotted).
+
+# %%
+eoc_rows = eoc[eoc["N"] != "regression"]
+regr = eoc[eoc["N"] == "regression"].iloc[0]
+fig, axes = plt.subplots(1, 2, figsize=(13, 4.8))
+for norm in scene.norms:
+    (line,) = axes[0].loglog(h, errors[norm], marker="o", markersize=4, label=LABELS_TEX.get(norm, norm))
+    color = line.get_color()
+    axes[1].semilogx(eoc_rows["h"].astype(float), eoc_rows[norm].astype(float), marker="o", color=color,
+                     label=LABELS_TEX.get(norm, norm))
+    if norm in THEORETICAL_ORDERS:
+        axes[1].axhline(THEORETICAL_ORDERS[norm], color=color, linestyle="--", linewidth=0.8)
+    axes[1].axhline(float(regr[norm]), color=color, linestyle=":", linewidth=0.8)
+axes[0].set(xlabel="$h$", ylabel=r"$\|u-u_h\|$", title="errors")
+axes[1].set(xlabel="$h$ (finer mesh of the pair)", ylabel="EOC", title="EOCs (dashed: theory, dotted: regression)")
+for ax in axes:
+    ax.grid(True, which="both", linewidth=0.3, alpha=0.6)
+axes[1].invert_xaxis()
+axes[0].legend(fontsize=8, ncol=2)
+plt.show()
+
+summary = pd.DataFrame({
+    "regression slope": [float(regr[n]) for n in scene.norms],
+    "expected (− ε)": [THEORETICAL_ORDERS.get(n, math.nan) for n in scene.norms],
+}, index=[LABELS_MD.get(n, n) for n in scene.norms])
+summary["slope − expected"] = summary["regression slope"] - summary["expected (− ε)"]
+summary.round(4)
+
+# %% [markdown]
+# ## Your `p`: the `L^p` and `W^{1,p}` rates against the theory
+#
+# Set `p` (any `p ≥ 1`, or `math.inf`) and run the cell. The paper's expected orders (each
+# minus ε) are `2` and `1` for `p ≤ 4`, and `3/2 + 2/p` and `1/2 + 2/p` beyond
+# (`signorini.explore.expected_orders`). The errors are the pipeline's cached norm values
+# where a norm job exists (e.g. `p = 4, 16, ∞`), else they are evaluated now on the cached
+# solutions with `signorini.norms.evaluate_norms` and the scene's conventions (a few seconds
+# per mesh of the paper scene).
+
+# %%
+p = 6
+
+lp_name, w1p_name = explore.norm_names(p)
+rate_errors, rates = explore.rates_for_p(scene, p)
+print(f"p = {p}: expected orders {lp_name} {explore.expected_orders(p)[0]:.4f}, "
+      f"{w1p_name} {explore.expected_orders(p)[1]:.4f} (each minus ε)")
+display(rate_errors)
+display(rates.round(4))

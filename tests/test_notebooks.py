@@ -1,0 +1,194 @@
+"""The notebooks in notebooks/ run headless, without error, on the smoke scene.
+
+A temporary copy of the repository (Snakefile, workflow/, src/, notebooks/) gets the smoke
+scene built by Snakemake (``signorini.explore.build_scene``, the same call a notebook makes
+when no scene is built); the notebooks are then converted with jupytext and executed with
+nbclient in a kernel running this interpreter (a kernelspec written to a temporary
+``JUPYTER_PATH``, so nothing needs to be registered on the machine). ``SIGNORINI_ROOT`` and
+``SIGNORINI_SCENE`` point them at the copy, so the developer's ``results/`` is never read.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import math
+import os
+import shutil
+import sys
+import time
+from pathlib import Path
+
+import jupytext
+import numpy as np
+import pytest
+from nbclient import NotebookClient
+
+from signorini import explore
+
+ROOT = Path(__file__).resolve().parents[1]
+NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.py"))
+KERNEL = "signorini-notebook-test"
+TIMEOUT_PER_CELL = 180
+
+
+def test_notebooks_are_present_and_paired():
+    assert [p.stem for p in NOTEBOOKS] == ["01_problem", "02_convergence", "03_solvers", "04_stability"]
+    config = (ROOT / "notebooks" / "jupytext.toml").read_text()
+    assert 'formats = "ipynb,py:percent"' in config
+    for path in NOTEBOOKS:
+        nb = jupytext.read(path)
+        assert nb.metadata["jupytext"]["formats"] == "ipynb,py:percent", path.name
+        assert nb.cells[0].cell_type == "markdown" and nb.cells[0].source.startswith("# 0"), path.name
+        # saving from Jupyter rewrites the script: it must come back unchanged (no churn in git)
+        assert jupytext.writes(nb, fmt="py:percent") == path.read_text(), f"{path.name}: not in jupytext's layout"
+    assert "notebooks/*.ipynb" in (ROOT / ".gitignore").read_text().splitlines()
+
+
+# --- the helpers the notebooks call ----------------------------------------------------------------
+
+
+def test_expected_orders_match_table2_theory():
+    from signorini.tables import THEORETICAL_ORDERS
+
+    assert explore.expected_orders(2) == (2.0, 1.0) and explore.expected_orders(4) == (2.0, 1.0)
+    assert explore.expected_orders(16) == (THEORETICAL_ORDERS["L16"], THEORETICAL_ORDERS["W116"])
+    assert explore.expected_orders(math.inf) == (THEORETICAL_ORDERS["Linf"], THEORETICAL_ORDERS["W1inf"])
+    assert explore.norm_names(6) == ("L6", "W16") and explore.norm_names(2.5) == ("L2.5", "W12.5")
+    assert explore.norm_names(math.inf) == ("Linf", "W1inf")
+    with pytest.raises(ValueError):
+        explore.expected_orders(0.5)
+
+
+def test_locate_scene_prefers_paper_then_smoke(tmp_path, monkeypatch):
+    monkeypatch.delenv(explore.SCENE_ENV, raising=False)
+    with pytest.raises(FileNotFoundError):
+        explore.locate_scene(root=tmp_path, build=False)
+    for scene in ("smoke", "paper"):
+        d = tmp_path / "results" / scene
+        d.mkdir(parents=True)
+        (d / "errors.csv").write_text("N,h,L4\n11,0.09,0.04\n21,0.047,0.01\n")
+        (d / "eoc.csv").write_text("N,h,L4\n21,0.047,1.9\nregression,,1.9\n")
+        assert explore.locate_scene(root=tmp_path, build=False).name == scene
+    monkeypatch.setenv(explore.SCENE_ENV, "smoke")
+    assert explore.locate_scene(root=tmp_path, build=False).name == "smoke"
+    (tmp_path / "results/smoke/eoc.csv").write_text("N,h,L4\n21,0.047,1.9\n")  # truncated: not built
+    with pytest.raises(FileNotFoundError):
+        explore.locate_scene(root=tmp_path, build=False)
+
+
+def test_boundary_arclength_inverts_boundary_trace():
+    from signorini import Problem
+
+    trace = explore.boundary_trace(Problem(), n=50)
+    np.testing.assert_allclose(explore.boundary_arclength(trace["x"]), trace["s"], atol=1e-12)
+    assert trace["u"].min() >= 0.0 and trace["dn_u"].min() >= -1e-12  # Signorini conditions
+
+
+def test_active_set_history_matches_result():
+    from signorini import Problem
+    from signorini.discrete import build
+
+    result, history = explore.active_set_history(build(Problem(), 16), warm_start=None)
+    assert list(history["iteration"]) == list(range(1, result.iterations + 1))
+    assert history["changes"].iloc[-1] == 0 and history["active"].iloc[-1] == result.active.size
+
+
+def test_display_artifacts(tmp_path):
+    from IPython.display import Image, Markdown
+
+    (tmp_path / "a.md").write_text("# findings\n")
+    (tmp_path / "a.csv").write_text("# comment\nsolver,tol\nosqp,1e-3\n")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, _ = plt.subplots()
+    fig.savefig(tmp_path / "a.png")
+    plt.close(fig)
+    paths = explore.existing(tmp_path, "a.md", "a.csv", "a.png", "missing.csv")
+    assert list(paths) == ["a.md", "a.csv", "a.png"]
+    objs = explore.display_artifacts(paths)
+    assert isinstance(objs[1], Markdown) and isinstance(objs[5], Image)
+    assert list(objs[3].columns) == ["solver", "tol"]
+    assert os.fspath(paths["a.png"]).endswith("a.png")
+
+
+# --- the notebooks, executed -----------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def notebook_env(tmp_path_factory):
+    """A repository copy with the smoke scene built, and a kernelspec for this interpreter."""
+    repo = tmp_path_factory.mktemp("nbrepo")
+    shutil.copy2(ROOT / "Snakefile", repo / "Snakefile")
+    ignore = shutil.ignore_patterns("__pycache__", "*.egg-info", "*.pyc", "*.ipynb", ".ipynb_checkpoints")
+    for name in ("workflow", "src", "notebooks"):
+        shutil.copytree(ROOT / name, repo / name, ignore=ignore)
+    seconds = explore.build_scene("smoke", root=repo)
+    print(f"smoke scene built with Snakemake in {seconds:.1f} s")
+
+    jupyter = tmp_path_factory.mktemp("jupyter")
+    spec = jupyter / "kernels" / KERNEL
+    spec.mkdir(parents=True)
+    argv = [sys.executable, "-m", "ipykernel_launcher", "-f", "{connection_file}"]
+    (spec / "kernel.json").write_text(json.dumps({"argv": argv, "display_name": KERNEL, "language": "python"}))
+    env = {
+        "JUPYTER_PATH": str(jupyter),
+        explore.ROOT_ENV: str(repo),
+        explore.SCENE_ENV: "smoke",
+        "OMP_NUM_THREADS": "1",
+        "OPENBLAS_NUM_THREADS": "1",
+        "MKL_NUM_THREADS": "1",
+        "PYTHONDONTWRITEBYTECODE": "1",
+    }
+    with pytest.MonkeyPatch.context() as mp:  # the kernel inherits the environment
+        for key, value in env.items():
+            mp.setenv(key, value)
+        yield repo
+
+
+@pytest.fixture(scope="module")
+def executed(notebook_env):
+    """Every notebook executed once, all concurrently (one kernel each): {name: (notebook, error, seconds)}."""
+
+    async def run(path: Path):
+        nb = jupytext.read(notebook_env / "notebooks" / path.name)
+        client = NotebookClient(
+            nb,
+            kernel_name=KERNEL,
+            timeout=TIMEOUT_PER_CELL,
+            resources={"metadata": {"path": str(notebook_env / "notebooks")}},
+        )
+        t0 = time.perf_counter()
+        try:
+            await client.async_execute()  # raises CellExecutionError at the first failing cell
+            error = None
+        except Exception as exc:  # reported by the notebook's own test
+            error = exc
+        return path.name, (nb, error, time.perf_counter() - t0)
+
+    async def run_all():
+        return dict(await asyncio.gather(*(run(path) for path in NOTEBOOKS)))
+
+    t0 = time.perf_counter()
+    results = asyncio.run(run_all())
+    print(
+        f"notebooks executed concurrently in {time.perf_counter() - t0:.1f} s: "
+        + ", ".join(f"{name} {sec:.1f} s" for name, (_, _, sec) in results.items())
+    )
+    return results
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("path", NOTEBOOKS, ids=[p.stem for p in NOTEBOOKS])
+def test_notebook_executes(path, executed):
+    nb, error, _ = executed[path.name]
+    if error is not None:
+        pytest.fail(f"{path.name} failed:\n{error}", pytrace=False)
+    outputs = [o for cell in nb.cells if cell.cell_type == "code" for o in cell.get("outputs", [])]
+    assert not [o for o in outputs if o.get("output_type") == "error"]
+    assert any("image/png" in o.get("data", {}) for o in outputs), "no figure produced"
+    text = "".join(o.get("text", "") for o in outputs if o.get("output_type") == "stream")
+    assert "scene 'smoke'" in text  # the notebook read the copy's smoke scene, not the developer's results/
