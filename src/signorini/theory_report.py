@@ -69,7 +69,9 @@ def rate_rows(errors: pd.DataFrame, last: int = 3) -> pd.DataFrame:
                 "theory": expected_rate(name),
             }
         )
-    return pd.DataFrame(rows).sort_values(["norm", "p"], key=lambda s: s.map(str) if s.name == "norm" else s)
+    df = pd.DataFrame(rows)
+    df["family"] = df["norm"].str.startswith("W1").map({False: "L", True: "W1"})
+    return df.sort_values(["family", "p"]).drop(columns="family").reset_index(drop=True)
 
 
 def rate_figure(rates: pd.DataFrame, out_pdf: str | os.PathLike, out_png: str | os.PathLike) -> None:
@@ -106,7 +108,11 @@ def extra_figure(table: pd.DataFrame, out_pdf: str | os.PathLike, out_png: str |
     h = table["h"].to_numpy()
     fig, axes = plt.subplots(1, 3, figsize=(13.0, 4.0))
     series = [
-        (axes[0], [("H1", r"$\|u-u_h\|_{H^1}$"), ("supercloseness_H1", r"$\|R_hu-u_h\|_{H^1}$")], [1.0, 1.5]),
+        (
+            axes[0],
+            [("H1", r"$\|u-u_h\|_{H^1}$"), ("supercloseness_H1", r"$\|R_hu-u_h\|_{H^1}$")],
+            [(1.0, "H1"), (1.5, "supercloseness_H1")],
+        ),
         (
             axes[1],
             [
@@ -115,16 +121,17 @@ def extra_figure(table: pd.DataFrame, out_pdf: str | os.PathLike, out_png: str |
                 ("L4plus", r"$\|(u-u_h)^+\|_{L^4}$"),
                 ("L4minus", r"$\|(u-u_h)^-\|_{L^4}$"),
             ],
-            [1.5, 2.0],
+            [(1.5, "H12_discrete"), (2.0, "L4plus")],
         ),
     ]
     for ax, curves, refs in series:
         for col, label in curves:
             y = table[col].to_numpy()
             ax.loglog(h, y, "o-", label=f"{label} (slope {regression_slope(h, y):.2f})")
-        for k, r in enumerate(refs):
-            y0 = table[curves[k][0]].iloc[-1]
+        for r, anchor in refs:  # reference slopes h^r through the finest value of ``anchor``
+            y0 = 0.7 * table[anchor].iloc[-1]
             ax.loglog(h, y0 * (h / h[-1]) ** r, "k--", lw=0.7, alpha=0.6)
+            ax.annotate(f"$h^{{{r:g}}}$", (h[0], y0 * (h[0] / h[-1]) ** r), fontsize=7, alpha=0.7)
         ax.set_xlabel("h")
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=7)
@@ -159,13 +166,23 @@ def findings(table: pd.DataFrame, rates: pd.DataFrame) -> str:
         "",
         "## Rates against p (Theorem 6.1; critical exponent p = 4, Remark 6.2)",
         "",
-        "| norm | slope (all) | slope (finest 3) | last EOC | theory |",
-        "|---|---:|---:|---:|---:|",
+        "| norm | slope (all) | slope (finest 3) | last EOC | theory | finest 3 vs theory |",
+        "|---|---:|---:|---:|---:|---|",
     ]
     for _, r in rates.iterrows():
+        gap = r[finest] - r["theory"]
+        verdict = "agrees (±0.03)" if abs(gap) <= 0.03 else ("faster" if gap > 0 else "slower")
         lines.append(
-            f"| {r['norm']} | {r['slope_all']:.3f} | {r[finest]:.3f} | {r['eoc_last']:.3f} | {r['theory']:.3f} − ε |"
+            f"| {r['norm']} | {r['slope_all']:.3f} | {r[finest]:.3f} | {r['eoc_last']:.3f} | "
+            f"{r['theory']:.3f} − ε | {verdict} ({gap:+.3f}) |"
         )
+    lines += [
+        "",
+        "The expected orders are what the a priori estimates guarantee (error ≤ C h^(order − ε)); "
+        "a faster observed rate means the estimate is not attained by this example on these meshes "
+        "(for 4 < p < ∞ the L^p rate approaches 3/2 + 2/p only as h → 0: compare the slope over all "
+        "meshes with the slope over the finest three).",
+    ]
     lines += [
         "",
         "## Supercloseness, H^{1/2}, one-sided L⁴",
@@ -187,7 +204,7 @@ def findings(table: pd.DataFrame, rates: pd.DataFrame) -> str:
     ]
     for _, r in table.iterrows():
         lines.append(
-            f"| {r['N']} | {r['contact_nodes']} | {r['free_point_offset']:.2e} | "
+            f"| {int(r['N'])} | {int(r['contact_nodes'])} | {r['free_point_offset']:.2e} | "
             f"{r['nearest_contact_to_x0_minus_R']:.3f} | {r['hausdorff']:.3f} |"
         )
     lines += [
