@@ -23,6 +23,8 @@ include: "workflow/rules/solve.smk"
 include: "workflow/rules/norms.smk"
 include: "workflow/rules/render.smk"
 include: "workflow/rules/theory.smk"
+include: "workflow/rules/work_precision.smk"
+include: "workflow/rules/stability.smk"
 
 
 rule all:

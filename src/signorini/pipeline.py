@@ -52,6 +52,17 @@ STAGE_MODULES: dict[str, tuple[str, ...]] = {
     "figures": (*_BASE, "mesh.py", "figures.py"),
     "reproduction": (*_BASE, "tables.py"),
     "runtime": _BASE,
+    "stability_case": (
+        *_BASE,
+        "mesh.py",
+        "assembly.py",
+        "discrete.py",
+        "quadrature.py",
+        "norms.py",
+        *SOLVER_MODULES,
+        "stability.py",
+    ),
+    "stability_atlas": (*_BASE, "figures.py", "stability.py", "stability_report.py"),
     "theory": (*_BASE, "mesh.py", "assembly.py", "quadrature.py", "theory.py", *SOLVER_MODULES),
     "theory_report": (*_BASE, "mesh.py", "convergence.py", "theory.py", "theory_report.py"),
     "work_precision_system": (*_BASE, "mesh.py", "assembly.py", "discrete.py", *SOLVER_MODULES, "work_precision.py"),
@@ -66,8 +77,8 @@ STAGE_MODULES: dict[str, tuple[str, ...]] = {
         "work_precision.py",
     ),
     "work_precision_table": (*_BASE, "work_precision.py"),
-    "work_precision_figures": (*_BASE, "work_precision.py", "figures.py"),
-    "work_precision_report": (*_BASE, "convergence.py", "tables.py", "work_precision.py"),
+    "work_precision_figures": (*_BASE, "work_precision.py", "work_precision_report.py", "figures.py"),
+    "work_precision_report": (*_BASE, "convergence.py", "tables.py", "work_precision.py", "work_precision_report.py"),
 }
 
 PATHS = {

@@ -126,3 +126,117 @@ class Problem:
         dpr = self.dpsi_over_r(r)
         out[inside] = self.A * ut * (-4.0 * dpr - self.d2psi(r) + self.c * self.psi(r))
         return out
+
+
+# --- problems with simple data and a closed-form solution (stability atlas, degenerate contact) ---
+#
+# Same interface as ``Problem`` (``u``, ``grad_u``, ``f``, ``c``, ``as_dict``), so ``assembly``,
+# ``discrete`` and ``norms`` take them unchanged.  With f ≡ const the load vector is
+# ``b = f M 1`` (the quadrature is exact), and ``K 1 = 0`` (no Dirichlet part), so the
+# constant solutions below are also the *discrete* solutions, up to round-off.
+
+
+def _finite(obj, names: tuple[str, ...]) -> None:
+    for name in names:
+        value = getattr(obj, name)
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+            raise ProblemParameterError(f"problem parameter {name}={value!r} must be a finite number")
+
+
+@dataclass(frozen=True)
+class ConstantProblem:
+    """``-Δu + c u = f ≡ value`` with the Signorini conditions on all of ∂Ω.
+
+    - ``value > 0``, ``c > 0``: ``u ≡ value / c``; ``u > 0`` and ``∂_ν u = 0`` on ∂Ω, so the
+      contact set is empty (**no contact**).
+    - ``value = 0``: ``u ≡ 0``, and ``u = ∂_ν u = 0`` on all of ∂Ω: every boundary point is
+      **biactive** (weakly active, non-strict complementarity), the worst case for an
+      active-set method.
+    - ``value < 0`` is excluded: the solution is then the Dirichlet solution (full contact,
+      ``u ≤ 0``, ``∂_ν u ≥ 0`` by the maximum principle and Hopf's lemma), with no closed
+      form; ``FullContactProblem`` is a full-contact case that has one.  Note that
+      ``u ≡ 0`` is *not* the solution for ``f ≡ -1``: the constraint acts on ∂Ω only and
+      ``-Δ0 + c 0 = 0 ≠ -1`` in Ω.
+    """
+
+    value: float = 1.0
+    c: float = 1.0
+
+    def __post_init__(self) -> None:
+        _finite(self, ("value", "c"))
+        if self.c < 0.0:
+            raise ProblemParameterError(f"reaction coefficient c={self.c} must be non-negative")
+        if self.value < 0.0:
+            raise ProblemParameterError(
+                f"value={self.value} < 0: the solution is the Dirichlet solution, not known in closed form "
+                "(use FullContactProblem for full contact)"
+            )
+        if self.value > 0.0 and self.c == 0.0:
+            raise ProblemParameterError("value > 0 needs c > 0 (for c = 0 the problem has no solution: ∫f > 0)")
+
+    @property
+    def exact(self) -> float:
+        """The constant solution ``value / c`` (0 for ``value = 0``)."""
+        return self.value / self.c if self.value > 0.0 else 0.0
+
+    def as_dict(self) -> dict[str, float | str]:
+        return {"kind": "constant", "value": float(self.value), "c": float(self.c)}
+
+    def u(self, x: np.ndarray) -> np.ndarray:
+        return np.full(np.shape(x)[1:], self.exact)
+
+    def grad_u(self, x: np.ndarray) -> np.ndarray:
+        return np.zeros(np.shape(x))
+
+    def f(self, x: np.ndarray) -> np.ndarray:
+        return np.full(np.shape(x)[1:], float(self.value))
+
+
+@dataclass(frozen=True)
+class FullContactProblem:
+    """``u = -A sin(π x₁) sin(π x₂)``, ``f = -Δu + c u = -A (2π² + c) sin(π x₁) sin(π x₂) ≤ 0``.
+
+    ``u = 0`` on ∂Ω and ``∂_ν u = A π sin(π s) ≥ 0`` (``s`` the arclength on an edge), so
+    ``u`` satisfies the Signorini conditions with **full contact**; the contact is strict
+    except at the four corners, where ``∂_ν u = 0`` (biactive).
+    """
+
+    A: float = 1.0
+    c: float = 1.0
+
+    def __post_init__(self) -> None:
+        _finite(self, ("A", "c"))
+        if self.A < 0.0:
+            raise ProblemParameterError(f"amplitude A={self.A} must be non-negative (A < 0 violates ∂_ν u ≥ 0)")
+        if self.c < 0.0:
+            raise ProblemParameterError(f"reaction coefficient c={self.c} must be non-negative")
+
+    def as_dict(self) -> dict[str, float | str]:
+        return {"kind": "full_contact", "A": float(self.A), "c": float(self.c)}
+
+    def u(self, x: np.ndarray) -> np.ndarray:
+        return -self.A * np.sin(np.pi * x[0]) * np.sin(np.pi * x[1])
+
+    def grad_u(self, x: np.ndarray) -> np.ndarray:
+        s1, s2 = np.sin(np.pi * x[0]), np.sin(np.pi * x[1])
+        c1, c2 = np.cos(np.pi * x[0]), np.cos(np.pi * x[1])
+        return -self.A * np.pi * np.stack([c1 * s2, s1 * c2])
+
+    def f(self, x: np.ndarray) -> np.ndarray:
+        return (2.0 * np.pi**2 + self.c) * self.u(x)
+
+
+PROBLEM_KINDS = {"manufactured": Problem, "constant": ConstantProblem, "full_contact": FullContactProblem}
+
+
+def make_problem(params: dict):
+    """A problem from a parameter mapping; ``kind`` (default ``manufactured``) selects the class
+    of ``PROBLEM_KINDS``, the other keys are its parameters."""
+    params = dict(params)
+    kind = params.pop("kind", "manufactured")
+    if kind not in PROBLEM_KINDS:
+        raise ProblemParameterError(f"unknown problem kind {kind!r}; choose one of {sorted(PROBLEM_KINDS)}")
+    try:
+        return PROBLEM_KINDS[kind](**params)
+    except TypeError as err:
+        raise ProblemParameterError(f"{kind} problem: {err}") from None

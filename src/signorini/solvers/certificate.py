@@ -11,6 +11,17 @@ with ``σ = max(‖Au‖∞, ‖b‖∞)``,
 - primal          ``max(0, -min u_B) / ‖u‖∞``
 - dual            ``max(0, -min λ_B) / σ``
 - complementarity ``max |u_i λ_i| / (‖u‖∞ σ)``
+
+Rounding floor.  ``A u - b`` cannot be evaluated more accurately than about
+``ε (|A||u|)_i`` per row (ε the unit round-off); the rounded *exact* solution has a residual
+of that size.  When ``A u`` cancels (smooth data: ``u ≡ 1`` gives ``K u = 0``, so
+``σ = ‖b‖∞ = O(h²)`` while ``|A||u| = O(1)``), the load-relative stationarity of even the
+best double-precision solution is ``≈ ε ‖|A||u|‖∞ / σ = O(ε/h²)`` (7e-11 at N = 201, 1.8e-9 at
+N = 1001 for ``f ≡ 1, c = 1``; a plain Cholesky solve left 5.6e-10 and 5.8e-8: stability
+atlas), above any 1e-10 tolerance.  The certificate therefore
+accepts residuals up to ``max(tol, floor)`` with ``floor = 16 ε ‖|A||u|‖∞ / σ`` (16 covers
+the 7 products of a P1 row and the rounding of u itself).  For the paper's data the floor is
+far below 1e-10 (1.6e-12 at N = 501, growing like N²).  ``tol = 0`` demands exact zeros (no floor).
 """
 
 from __future__ import annotations
@@ -21,6 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 
 _TINY = np.finfo(float).tiny
+ROUNDOFF_FACTOR = 16.0  # the floor is ROUNDOFF_FACTOR · ε · ‖|A||u|‖∞ / σ (module docstring)
 
 
 class KKTError(RuntimeError):
@@ -46,22 +58,30 @@ class Certificate:
     dual: float
     complementarity: float
     tol: float
+    floor: float = 0.0  # rounding floor of the residual evaluation, relative like the residuals
+
+    @property
+    def threshold(self) -> float:
+        """What the residuals are compared with: ``max(tol, floor)``; exactly 0 when ``tol = 0``."""
+        return max(self.tol, self.floor) if self.tol > 0.0 else 0.0
 
     @property
     def worst(self) -> float:
-        return max(self.stationarity, self.primal, self.dual, self.complementarity)
+        # np.max propagates NaN; Python's max(0.0, nan) is 0.0, which would certify a NaN residual
+        return float(np.max([self.stationarity, self.primal, self.dual, self.complementarity]))
 
     @property
     def ok(self) -> bool:
-        return bool(np.isfinite(self.worst) and self.worst <= self.tol)
+        return bool(np.isfinite(self.worst) and self.worst <= self.threshold)
 
     def as_dict(self) -> dict[str, float | bool]:
-        return {**asdict(self), "worst": self.worst, "ok": self.ok}
+        return {**asdict(self), "threshold": self.threshold, "worst": self.worst, "ok": self.ok}
 
     def describe(self) -> str:
+        floor = f", rounding floor {self.floor:.1e}" if self.floor > self.tol > 0.0 else ""
         return (
             f"stationarity={self.stationarity:.2e}, primal={self.primal:.2e}, dual={self.dual:.2e}, "
-            f"complementarity={self.complementarity:.2e} (tolerance {self.tol:.1e})"
+            f"complementarity={self.complementarity:.2e} (tolerance {self.tol:.1e}{floor})"
         )
 
 
@@ -75,17 +95,61 @@ def kkt_certificate(
     sigma = max(np.abs(Au).max(initial=0.0), np.abs(b).max(initial=0.0), _TINY)
     unorm = max(np.abs(u).max(initial=0.0), _TINY)
     uB = u[constrained]
+    floor = ROUNDOFF_FACTOR * np.finfo(float).eps * float((abs(A) @ np.abs(u)).max(initial=0.0)) / sigma
     return Certificate(
         stationarity=float(np.abs(Au - b - lam_full).max(initial=0.0) / sigma),
         primal=float(max(0.0, -uB.min(initial=0.0)) / unorm),
         dual=float(max(0.0, -lam.min(initial=0.0)) / sigma),
-        complementarity=float(np.abs(uB * lam).max(initial=0.0) / (unorm * sigma)),
+        # two divisions: for u = 0, b = 0 (f ≡ 0) the product unorm·sigma = tiny² underflows to 0 (0/0 = NaN)
+        complementarity=float(np.abs(uB * lam).max(initial=0.0) / unorm / sigma),
         tol=float(tol),
+        floor=floor if np.isfinite(floor) else 0.0,
     )
 
 
+# Relative thresholds of the structural checks in ``check_qp_data`` (scale-free: they compare
+# entries of A with max |A_ij| or with A_ii, never with an absolute number).
+SYMMETRY_RTOL = 1e-12  # max |A - Aᵀ| ≤ SYMMETRY_RTOL · max |A|
+PSD_SHIFT = 1e-8  # A + PSD_SHIFT · diag(A) must admit a Cholesky factorisation
+
+
+def check_psd(A: sp.spmatrix) -> None:
+    """Reject a matrix that is not symmetric positive semidefinite (the QP would be non-convex,
+    and for an indefinite ``A`` unbounded along some directions: no minimiser exists).
+
+    Symmetry: ``max |A - Aᵀ| ≤ 1e-12 max |A|``.  Semidefiniteness, cheaply first: a symmetric
+    matrix with positive diagonal and ``A_ii ≥ Σ_{j≠i} |A_ij|`` is PSD (Gershgorin).  P1 on
+    non-obtuse meshes (every Friedrichs–Keller mesh) passes for every ``c ≥ 0``: ``K`` has
+    zero row sums and non-positive off-diagonal entries, and the P1 mass matrix has
+    ``M_ii = Σ_{j≠i} M_ij``, so ``Σ_{j≠i} |K_ij + c M_ij| ≤ K_ii + c M_ii``.  Otherwise (e.g. a
+    jittered mesh with obtuse triangles) a Cholesky factorisation of ``A + 1e-8 diag(A)``
+    decides (``linalg.is_positive_definite``); the shift admits the singular ``A = K`` of
+    ``c = 0`` (semicoercive, still convex) and rejects ``λ_min(A) < -1e-8 max A_ii`` roughly.
+    """
+    A = sp.csr_matrix(A)
+    scale = max(float(np.abs(A.data).max(initial=0.0)), _TINY)
+    asym = float(np.abs((A - A.T).data).max(initial=0.0))
+    if asym > SYMMETRY_RTOL * scale:
+        raise BadInputError(
+            f"matrix is not symmetric: max |A - Aᵀ| = {asym:.2e} = {asym / scale:.1e} max |A| "
+            f"(tolerance {SYMMETRY_RTOL:.0e})"
+        )
+    d = A.diagonal()
+    off = np.asarray(abs(A).sum(axis=1)).ravel() - np.abs(d)
+    if np.all(d >= off - 1e-12 * d):  # weakly diagonally dominant, positive diagonal: PSD
+        return
+    from signorini.solvers.linalg import is_positive_definite
+
+    if not is_positive_definite(A + PSD_SHIFT * sp.diags(d)):
+        raise BadInputError(
+            "matrix is not positive semidefinite (Cholesky factorisation of A + 1e-8 diag(A) fails): "
+            "the QP is non-convex and has no minimiser in general"
+        )
+
+
 def check_qp_data(A: sp.spmatrix, b: np.ndarray, constrained: np.ndarray) -> None:
-    """Reject data that no solver should see: NaN/Inf, bad shapes, out-of-range indices."""
+    """Reject data that no solver should see: NaN/Inf, bad shapes, out-of-range, duplicate or
+    no constrained indices, a matrix that is not symmetric positive semidefinite."""
     n = b.shape[0]
     if A.shape != (n, n):
         raise BadInputError(f"matrix shape {A.shape} does not match right-hand side length {n}")
@@ -98,3 +162,10 @@ def check_qp_data(A: sp.spmatrix, b: np.ndarray, constrained: np.ndarray) -> Non
         raise BadInputError("constrained indices out of range")
     if np.any(A.diagonal() <= 0):
         raise BadInputError("matrix has non-positive diagonal entries: it is not symmetric positive definite")
+    # An empty set would make the QP the linear system A u = b: not a Signorini problem, and
+    # almost always a caller's mistake (a wrong boundary index set); say so instead of solving.
+    if constrained.size == 0:
+        raise BadInputError("empty constraint set: no index carries the bound u_i ≥ 0 (not a Signorini QP)")
+    if np.unique(constrained).size != constrained.size:
+        raise BadInputError("duplicate constrained indices")
+    check_psd(A)

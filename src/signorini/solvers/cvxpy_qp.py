@@ -2,7 +2,22 @@
 
 ``min ½ uᵀAu - bᵀu  s.t.  u_B ≥ 0``; the multiplier is the dual value of the
 bound constraint.  ``psd_wrap`` skips cvxpy's eigenvalue PSD check, which is
-prohibitive for large sparse ``A`` (A is SPD by construction).
+prohibitive for large sparse ``A`` (``check_qp_data`` has certified A symmetric
+positive semidefinite before).
+
+Scaling.  The QP solvers stop on *absolute* tolerances (OSQP's ``eps_abs``, SCS's
+``eps_abs``, Clarabel's ``tol_gap_abs``/``tol_feas`` against unscaled norms), so the
+same data multiplied by 10⁻¹² is "solved" by ``u = 0`` and by 10¹² never.  With
+``normalize=True`` the solver sees ``(A/α, b/β)``, whose KKT point is
+``(u', λ') = (α u/β, λ/β)`` (divide ``A u - b = λ`` by ``β`` and substitute ``u = (β/α) u'``);
+the answer is mapped back.  ``α = max_i A_ii`` and ``β = α ‖u_D‖∞`` with ``u_D`` the solution
+with ``u_B = 0`` (``A_II u_D = b_I`` on the unconstrained indices ``I``, one sparse
+factorisation), an estimate of ``‖u‖∞`` that is linear in the data: ``u' = O(1)`` and ``A'``
+has unit diagonal.  Every tolerance is then relative, and the result is invariant under
+``b → s b`` and ``A → s A`` up to round-off (``stability`` atlas, scaling cases).  (``β = ‖b‖∞``
+is not enough: for ``f ≡ 1`` at N = 201 it gives ``u' ≈ 2·10⁵`` against ``λ_min(A') ≈ 6·10⁻⁶``,
+and Clarabel and SCS declare the QP unbounded.)  Off by default so that the tolerance
+sweeps of ``benchmarks/qp_tolerance.py`` keep their meaning.
 """
 
 from __future__ import annotations
@@ -36,6 +51,25 @@ def installed_qp_solvers() -> list[str]:
     return sorted(s for s in cp.installed_solvers() if s in qp)
 
 
+def data_scales(A: sp.csr_matrix, b: np.ndarray, B: np.ndarray) -> tuple[float, float]:
+    """``(α, β)`` of ``normalize=True`` (module docstring): ``α = max A_ii``, ``β = α ‖u_D‖∞``;
+    ``β = ‖b‖∞`` when ``u_D`` is not available (no unconstrained index, ``u_D = 0``), 1 for ``b = 0``."""
+    from signorini.solvers.linalg import factorize
+
+    alpha = float(A.diagonal().max())
+    free = np.ones(b.size, dtype=bool)
+    free[B] = False
+    beta = 0.0
+    if free.any() and np.any(b[free]):
+        A_II = A[free][:, free]
+        # A_II is a principal block of the PSD A; the shift of check_psd keeps it definite
+        u_D = factorize(A_II + 1e-8 * sp.diags(A_II.diagonal()))(b[free])
+        beta = alpha * float(np.abs(u_D).max())
+    if not (np.isfinite(beta) and beta > 0.0):
+        beta = float(np.abs(b).max(initial=0.0))
+    return alpha, beta if beta > 0.0 else 1.0  # b = 0: the solution is u = 0 whatever the scale
+
+
 def cvxpy_solve(
     A: sp.spmatrix,
     b: np.ndarray,
@@ -44,9 +78,11 @@ def cvxpy_solve(
     tol: float | None = None,
     kkt_tol: float = 1e-6,
     check: bool = True,
+    normalize: bool = False,
     **solver_options,
 ) -> SolveResult:
-    """Solve the QP with cvxpy's ``solver``; ``tol`` sets all of the solver's tolerances.
+    """Solve the QP with cvxpy's ``solver``; ``tol`` sets all of the solver's tolerances,
+    ``normalize`` makes them relative to the data (see the module docstring).
 
     Raises ``NotConvergedError`` for a status other than optimal and ``KKTError``
     when ``check`` is set and the certificate exceeds ``kkt_tol``.
@@ -77,9 +113,12 @@ def cvxpy_solve(
                 options[name] = max(float(options[name]), 1e-10)  # HiGHS rejects smaller values
 
     t0 = time.perf_counter()
+    # (A, b) = (α A', β b'): the solver sees (A', b'), u = (β/α) u', λ = β λ' (module docstring)
+    alpha, beta = data_scales(A, b, B) if normalize else (1.0, 1.0)
+    Aq, bq = (A / alpha, b / beta) if normalize else (A, b)
     u = cp.Variable(b.size)
     bound = u[B] >= 0
-    prob = cp.Problem(cp.Minimize(0.5 * cp.quad_form(u, cp.psd_wrap(A)) - b @ u), [bound])
+    prob = cp.Problem(cp.Minimize(0.5 * cp.quad_form(u, cp.psd_wrap(Aq)) - bq @ u), [bound])
     try:
         prob.solve(solver=solver, **options)
     except cp.error.SolverError as err:
@@ -87,8 +126,8 @@ def cvxpy_solve(
     wall = time.perf_counter() - t0
     if prob.status != cp.OPTIMAL or u.value is None:
         raise NotConvergedError(f"cvxpy/{solver} returned status {prob.status!r}")
-    x = np.asarray(u.value, dtype=float)
-    lam = np.asarray(bound.dual_value, dtype=float).ravel()
+    x = (beta / alpha) * np.asarray(u.value, dtype=float)
+    lam = beta * np.asarray(bound.dual_value, dtype=float).ravel()
     stats = prob.solver_stats
     iterations = int(stats.num_iters) if stats.num_iters is not None else -1
     cert = kkt_certificate(A, b, B, x, lam, kkt_tol)
@@ -106,6 +145,8 @@ def cvxpy_solve(
             "status": prob.status,
             "solve_time_s": float(stats.solve_time or np.nan),
             "options": {k: str(v) for k, v in options.items()},
+            "normalize": bool(normalize),
+            "scales": [alpha, beta],
         },
     )
     if check and not cert.ok:

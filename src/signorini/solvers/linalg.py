@@ -127,6 +127,30 @@ class Factorizer:
         return solve
 
 
+def is_positive_definite(A: sp.spmatrix, prefer: str = "auto") -> bool:
+    """Whether the symmetric matrix ``A`` is numerically positive definite: its sparse
+    Cholesky factorisation ``A = L Lᵀ`` exists (CHOLMOD stops at the first non-positive
+    pivot).  SciPy's SuperLU, run without off-diagonal pivoting in symmetric mode, computes
+    ``A = L D Lᵀ``-like factors with ``D = diag(U)``; ``A`` is positive definite iff no row
+    was swapped and every pivot ``U_ii > 0`` (Sylvester: the pivots are ratios of leading
+    principal minors)."""
+    A = sp.csr_matrix(A)
+    A.sum_duplicates()
+    A.sort_indices()
+    backend = backend_name(prefer)
+    if backend != "superlu":
+        try:
+            Factorizer(A, backend)(A.data)
+        except (ValueError, RuntimeError):  # cholespy: "Matrix is not positive definite!"
+            return False
+        return True
+    try:
+        lu = spla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+    except RuntimeError:  # exactly singular
+        return False
+    return bool(np.array_equal(lu.perm_r, lu.perm_c) and np.all(lu.U.diagonal() > 0.0))
+
+
 def _indptr(rows: np.ndarray, n: int) -> np.ndarray:
     return np.concatenate([[0], np.cumsum(np.bincount(rows, minlength=n))]).astype(np.int32)
 

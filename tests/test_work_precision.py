@@ -1,0 +1,363 @@
+"""The work-precision study: norms of a P1 function, the measurement function (statuses,
+algebraic error of the exact solver), the stage modules, and a smoke scene end to end."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+from skfem import MeshTri
+from test_pipeline import ROOT, copy_repo, snakemake
+
+from signorini import pipeline
+from signorini import work_precision as wp
+from signorini import work_precision_report as wpr
+from signorini.mesh import friedrichs_keller
+from signorini.norms import Conventions, evaluate_norms
+from signorini.problem import Problem
+from signorini.quadrature import stroud_conical
+from signorini.solvers import Certificate, NotConvergedError, SolveResult
+
+PROBLEM = {"x0": 0.5, "R": 0.45, "A": 10, "c": 1}
+NORMS = list(wp.STUDY_NORMS)
+
+
+# --- norms of a P1 function -----------------------------------------------------------------
+
+
+def test_complete_homogeneous_polynomial(rng):
+    x, y, z = rng.standard_normal((3, 7))
+    for p in (0, 1, 2, 4, 16):
+        brute = sum(x**a * y**b * z ** (p - a - b) for a in range(p + 1) for b in range(p + 1 - a))
+        np.testing.assert_allclose(wp._complete_homogeneous(x, y, z, p), brute, rtol=1e-12)
+
+
+@pytest.mark.parametrize("form", ["components", "gradient", "seminorm"])
+def test_p1_norms_match_the_quadrature_norms(rng, form):
+    """Where the pipeline's quadrature is exact for a P1 function (|v|⁴, |∇v|^p, boundary
+    integrands; maxima at vertices), p1_norms agrees with evaluate_norms of u ≡ 0 (A = 0)."""
+    mesh = friedrichs_keller(9)
+    v = rng.standard_normal(mesh.p.shape[1])
+    conv = Conventions(w1p_form=form)
+    names = ["L2", "L4", "Linf", "W14", "W1inf", "H1", "H12", "L2boundary"]
+    ours = wp.p1_norms(mesh, v, names, conv)
+    ref = evaluate_norms(Problem(A=0.0), mesh, v, names, conv)
+    for name in names:
+        assert ours[name] == pytest.approx(ref[name], rel=1e-12), name
+
+
+def test_p1_norms_high_powers_are_exact(rng):
+    """L¹⁶ of a linear function on one triangle against a 400-point conical Gauss rule."""
+    tri = MeshTri(np.array([[0.0, 0.7, 0.1], [0.0, 0.2, 0.9]]), np.array([[0], [1], [2]]))
+    w = np.array([0.3, -1.0, 0.7])
+    s, t, weights = stroud_conical(20)
+    values = w @ np.vstack([1 - s, s * (1 - t), s * t])
+    area = 0.5 * abs(0.7 * 0.9 - 0.1 * 0.2)
+    for p in (4, 16):
+        ref = (area * np.sum(np.abs(values) ** p * weights)) ** (1 / p)
+        assert wp.p1_norms(tri, w, [f"L{p}"])[f"L{p}"] == pytest.approx(ref, rel=1e-12)
+    assert wp.p1_norms(tri, 1e-150 * w, ["L16"])["L16"] == pytest.approx(1e-150 * ref, rel=1e-12)  # no underflow
+
+
+def test_p1_norms_of_zero_and_unsupported_names():
+    mesh = friedrichs_keller(4)
+    assert wp.p1_norms(mesh, np.zeros(25), NORMS) == dict.fromkeys(NORMS, 0.0)
+    with pytest.raises(ValueError, match="not supported"):
+        wp.p1_norms(mesh, np.ones(25), ["L4plus"])
+
+
+# --- configurations, skips and failure classification -----------------------------------------
+
+
+def test_study_configs_add_installed_solvers():
+    study = {"configs": {"osqp": {"solver": "osqp", "label": "OSQP (polish)"}}, "qp_solvers": "installed"}
+    configs = wp.study_configs(study, installed=["CLARABEL", "OSQP"])
+    assert list(configs) == ["osqp", "clarabel"]
+    assert configs["osqp"].solver == "OSQP" and configs["osqp"].label == "OSQP (polish)"
+    assert configs["clarabel"].solver == "CLARABEL" and not configs["clarabel"].exact
+
+
+def test_skip_reason_from_the_previous_mesh():
+    ok = {"N": 101, "n_dofs": 10404, "status": "ok", "reason": "", "time_s": 10.0}
+    assert wp.skip_reason(None, 40401, 120.0) is None
+    assert wp.skip_reason(ok, 40401, 120.0) is None  # predicted 10 · 3.88^1.5 ≈ 77 s
+    assert wp.skip_reason(ok, 40401, 60.0).startswith("time budget (predicted 77 s")
+    failed = {**ok, "status": "failed", "reason": "solver status infeasible"}
+    assert wp.skip_reason(failed, 40401, None) == "failed at N=101: solver status infeasible"
+    limit = {**ok, "status": "failed", "reason": "time limit (120 s)"}
+    assert wp.skip_reason(limit, 40401, 120.0).startswith("time budget")
+    skipped = {"N": 201, "status": "skipped", "reason": "failed at N=101: x"}
+    assert wp.skip_reason(skipped, 90601, 120.0) == "failed at N=101: x"
+
+
+def test_classify_failure():
+    assert wp.classify_failure(NotConvergedError("cvxpy/OSQP returned status 'user_limit'"), 119.0, 120.0) == (
+        "failed",
+        "time limit (120 s)",
+    )
+    assert wp.classify_failure(NotConvergedError("cvxpy/OSQP returned status 'user_limit'"), 1.0, 120.0)[1] == (
+        "iteration limit (status user_limit)"
+    )
+    status, reason = wp.classify_failure(NotConvergedError("cvxpy/SCS returned status 'optimal_inaccurate'"), 1, None)
+    assert status == "inaccurate" and "optimal_inaccurate" in reason
+    assert wp.classify_failure(ValueError("boom"), 0.1, None) == ("failed", "ValueError: boom")
+
+
+# --- the measurement ------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def small_study(tmp_path_factory):
+    """N = 12: the cached system, the exact solution and the discretisation errors, as the
+    workflow provides them to a measurement job."""
+    d = tmp_path_factory.mktemp("wp")
+    N = 12
+    wp.system_stage(PROBLEM, N, "sw_ne", d / "system.npz", d / "system.json")
+    pipeline.solve_stage(PROBLEM, N, "active_set", d / "solution.npz", d / "solution.json")
+    disc = {}
+    for n in NORMS:
+        pipeline.norm_stage(PROBLEM, N, d / "solution.npz", n, d / f"{n}.json")
+        disc[n] = d / f"{n}.json"
+    return {"dir": d, "N": N, "disc": disc}
+
+
+def measure(small_study, config: dict, tolerances=(1e-2,), out="out.json", **kwargs) -> list[dict]:
+    d = small_study["dir"]
+    spec = {"name": "x", "label": "x", "options": {}, **config}
+    info = wp.measure_stage(
+        PROBLEM,
+        small_study["N"],
+        spec,
+        tolerances,
+        30.0,
+        d / "system.npz",
+        d / "system.json",
+        d / "solution.npz",
+        small_study["disc"],
+        d / out,
+        **kwargs,
+    )
+    return info["records"]
+
+
+def test_exact_solver_has_zero_algebraic_error(small_study):
+    (rec,) = measure(small_study, {"solver": "active_set"})
+    assert rec["status"] == "ok" and rec["tol_label"] == "exact" and rec["kkt_worst"] <= 1e-10
+    for n in NORMS:
+        assert rec[f"alg_{n}"] == 0.0
+        assert rec[f"total_{n}"] == rec[f"disc_{n}"]  # the source scene's discretisation error
+    assert rec["time_runs"] == 3 and rec["time_s"] == pytest.approx(
+        min(float(t) for t in rec["times"].split()), rel=1e-5
+    )
+    (cold,) = measure(small_study, {"solver": "active_set", "options": {"warm_start": None, "backend": "superlu"}})
+    assert cold["status"] == "ok" and cold["alg_L4"] < 1e-12 * cold["disc_L4"]
+
+
+def test_qp_solver_runs_default_then_loose_to_tight(small_study):
+    recs = measure(small_study, {"solver": "OSQP", "options": {"polishing": False}}, tolerances=(1e-8, 1e-2))
+    assert [r["tol_label"] for r in recs] == ["default", "1e-02", "1e-08"]
+    assert recs[0]["is_default"] and not recs[1]["is_default"]
+    assert all(r["status"] in ("ok", "inaccurate") for r in recs)
+    assert recs[1]["alg_L4"] > recs[2]["alg_L4"] > 0.0  # a tighter tolerance, a smaller algebraic error
+    # total error within the triangle inequality of discretisation and algebraic error
+    for r in recs:
+        assert r["total_W14"] <= r["disc_W14"] + r["alg_W14"] * (1 + 1e-9)
+
+
+def test_failing_solver_is_recorded_not_raised(small_study, monkeypatch):
+    import signorini.solvers
+
+    recs = measure(small_study, {"solver": "NOSUCH"}, out="nosuch.json")
+    assert {r["status"] for r in recs} == {"failed"}
+    assert all("NOSUCH" in r["reason"] and "alg_L4" not in r for r in recs)
+    assert np.isfinite(recs[0]["time_s"]) and recs[0]["disc_L4"] > 0
+
+    # an answer whose KKT residual exceeds the requested tolerance is measured and marked
+    exact = wp.load_system(small_study["dir"] / "system.npz")[1] * 0.0
+
+    def sloppy(A, b, B, solver, tol=None, **kwargs):
+        cert = Certificate(1e-1, 0.0, 0.0, 0.0, 1e-6)
+        return SolveResult(exact.copy(), np.zeros(B.size), B, 7, 0.01, cert, "cvxpy_fake")
+
+    monkeypatch.setattr(signorini.solvers, "cvxpy_solve", sloppy)
+    recs = measure(small_study, {"solver": "OSQP"}, out="sloppy.json")
+    assert [r["status"] for r in recs] == ["inaccurate", "inaccurate"]
+    assert [r["reason"] for r in recs] == [
+        "KKT residual 1.0e-01 > tolerance 1e-03",  # OSQP's default
+        "KKT residual 1.0e-01 > tolerance 1e-02",
+    ]
+    assert recs[0]["alg_L4"] > 0 and recs[0]["iterations"] == 7
+
+    def raising(*args, **kwargs):
+        raise NotConvergedError("cvxpy/OSQP returned status 'infeasible'")
+
+    monkeypatch.setattr(signorini.solvers, "cvxpy_solve", raising)
+    recs = measure(small_study, {"solver": "OSQP"}, out="raising.json")
+    assert [(r["status"], r["reason"]) for r in recs] == [("failed", "solver status infeasible")] * 2
+
+
+def test_previous_failure_skips_the_run(small_study):
+    measure(small_study, {"solver": "NOSUCH"}, out="prev.json")
+    recs = measure(small_study, {"solver": "NOSUCH"}, out="next.json", prev_json=small_study["dir"] / "prev.json")
+    assert {r["status"] for r in recs} == {"skipped"}
+    assert all(r["reason"].startswith("failed at N=12") for r in recs)
+
+
+def test_findings_on_a_synthetic_table():
+    rows = []
+    for N, disc in ((10, 1.0e-3), (20, 2.5e-4), (40, 6.25e-5)):
+        base = {"N": N, "h": 1 / N, "n_dofs": (N + 1) ** 2, "build_s": 0.01 * N, "job_wall_s": 1.0}
+        base.update(job_started=0.0, load1=1.0, reason="")
+        common = {f"disc_{n}": disc for n in ("L4", "W14")}
+        rows.append(
+            {
+                **base,
+                **common,
+                "config": "exact",
+                "label": "AS",
+                "tol_label": "exact",
+                "status": "ok",
+                "time_s": 0.001 * N,
+                "total_L4": disc,
+                "total_W14": disc,
+                "alg_L4": 0.0,
+                "alg_W14": 0.0,
+            }
+        )
+        for tol, rel in (("1e-02", 1e-2), ("1e-06", 1e-7)):
+            rows.append(
+                {
+                    **base,
+                    **common,
+                    "config": "qp",
+                    "label": "QP",
+                    "tol_label": tol,
+                    "status": "ok",
+                    "time_s": 0.002 * N,
+                    "total_L4": disc * (1 + rel),
+                    "total_W14": disc,
+                    "alg_L4": rel * disc,
+                    "alg_W14": 0.0,
+                }
+            )
+    df = pd.DataFrame(rows)
+    found = wpr.findings(df, ["L4", "W14"], paper_l4={10: 1e-3}, paper_l4_eoc={20: 2.0, 40: 2.1})
+    assert found["needed"] == {"qp": "1e-06"}
+    cells = {(c["config"], c["tol_label"]): c for c in found["cells"]}
+    assert cells[("qp", "1e-02")]["changed"] == 3 and cells[("qp", "1e-06")]["changed"] == 0
+    exact_eoc = next(e for e in found["eoc"] if e["tol_label"] == "exact")
+    np.testing.assert_allclose(exact_eoc["eoc"], [2.0, 2.0])
+    assert exact_eoc["max_dev_paper"] == pytest.approx(0.1)
+    assert found["cheapest"][40] == {
+        "exact": {"tol_label": "exact", "time_s": 0.04},
+        "qp": {"tol_label": "1e-06", "time_s": 0.08},
+    }
+
+
+# --- stage modules --------------------------------------------------------------------------
+
+
+def test_stage_modules_cover_what_the_study_stages_import(small_study, tmp_path):
+    d = small_study["dir"]
+    disc = {n: str(p) for n, p in small_study["disc"].items()}
+    script = f"""
+import json, sys
+from signorini import work_precision as wp
+stage, d, t = sys.argv[1], {str(d)!r}, {str(tmp_path)!r}
+P = {PROBLEM!r}
+if stage == "work_precision_system":
+    wp.system_stage(P, 6, "sw_ne", t + "/s.npz", t + "/s.json")
+elif stage == "work_precision_measure":
+    cfg = {{"name": "osqp", "solver": "OSQP", "label": "OSQP", "options": {{}}}}
+    wp.measure_stage(P, 12, cfg, [1e-2], 10.0, d + "/system.npz", d + "/system.json", d + "/solution.npz",
+                     {disc!r}, t + "/m.json")
+    cfg = {{"name": "as", "solver": "active_set", "label": "AS", "options": {{}}}}
+    wp.measure_stage(P, 12, cfg, [], None, d + "/system.npz", d + "/system.json", d + "/solution.npz",
+                     {disc!r}, t + "/a.json")
+else:
+    wp.measure_stage(P, 12, {{"name": "as", "solver": "active_set", "label": "AS", "options": {{}}}}, [], None,
+                     d + "/system.npz", d + "/system.json", d + "/solution.npz", {disc!r}, t + "/a.json")
+    for m in list(sys.modules):
+        if m.startswith("signorini") and m not in ("signorini", "signorini.work_precision", "signorini.artifacts"):
+            del sys.modules[m]
+    if stage == "work_precision_table":
+        wp.collect_stage([t + "/a.json"], t + "/wp.csv")
+    elif stage == "work_precision_figures":
+        wp.collect_stage([t + "/a.json"], t + "/wp.csv")
+        from signorini import figures
+        df = wp.read_measurements(t + "/wp.csv")
+        figures.work_precision_figure(df, [12], t + "/f.pdf", t + "/f.png")
+        figures.cost_of_accuracy(df, t + "/c.pdf", t + "/c.png")
+    elif stage == "work_precision_report":
+        wp.collect_stage([t + "/a.json"], t + "/wp.csv")
+        ref = {str(ROOT / "workflow/reference")!r}
+        from signorini.work_precision_report import report_stage
+        report_stage(t + "/wp.csv", ref + "/paper_table1.csv", ref + "/paper_table2.csv", t + "/wp.md")
+mods = sorted(m for m in sys.modules if m == "signorini" or m.startswith("signorini."))
+print(json.dumps(mods))
+"""
+    for stage in [s for s in pipeline.STAGE_MODULES if s.startswith("work_precision")]:
+        out = subprocess.run([sys.executable, "-c", script, stage], capture_output=True, text=True)
+        assert out.returncode == 0, out.stderr[-3000:]
+        imported = set(json.loads(out.stdout.strip().splitlines()[-1]))
+        declared = {
+            ("signorini." + rel.removesuffix(".py").replace("/", ".")).removesuffix(".__init__")
+            for rel in pipeline.STAGE_MODULES[stage]
+        }
+        assert imported <= declared, f"{stage}: runs undeclared modules {sorted(imported - declared)}"
+
+
+# --- the scene end to end -------------------------------------------------------------------
+
+
+def test_smoke_study_end_to_end(tmp_path):
+    """A tiny study (N = 11, 21 of the smoke scene; active set and OSQP at two tolerances)
+    through `snakemake work_precision` in a repository copy: the paper_figures outputs, the
+    source scene's solutions reused (not recomputed), a no-op rerun."""
+    repo = copy_repo(tmp_path)
+    config_path = repo / "workflow/config.yaml"
+    config = yaml.safe_load(config_path.read_text())
+    config["scenes"]["work_precision"] = {
+        "N": [11, 21],
+        "norms": ["L4", "W14"],
+        "solver": "active_set",
+        "problem": PROBLEM,
+        "study": {
+            "source": "smoke",
+            "tolerances": [1e-2, 1e-8],
+            "time_limit_s": 30,
+            "figure_N": [11, 21],
+            "configs": {"active_set": {"solver": "active_set", "label": "active set"}},
+            "qp_solvers": ["OSQP"],
+        },
+    }
+    config_path.write_text(yaml.safe_dump(config, sort_keys=False))
+    t0 = time.perf_counter()
+    snakemake(repo, "-c2", "work_precision")
+    elapsed = time.perf_counter() - t0
+    print(f"smoke work-precision scene: {elapsed:.1f} s")
+    out = repo / "paper_figures"
+    for name in ("work_precision.pdf", "work_precision.png", "cost_of_accuracy.pdf", "cost_of_accuracy.png"):
+        assert (out / name).stat().st_size > 1000, name
+    df = pd.read_csv(out / "work_precision.csv")
+    assert len(df) == 2 * (1 + 3)  # per N: the active set, OSQP at its default and two tolerances
+    assert set(df["config"]) == {"active_set", "osqp"}
+    exact = df[df["config"] == "active_set"]
+    assert (exact["alg_L4"] == 0).all() and (exact["total_L4"] == exact["disc_L4"]).all()
+    assert set(df["status"]) <= {"ok", "inaccurate"}
+    assert {c.split("_", 1)[1] for c in df.columns if c.startswith("alg_")} == {"L4", "W14"}
+    md = (out / "work_precision.md").read_text()
+    assert "## Which tolerance keeps Table 1" in md and "Machine load" in md
+    # reused: the smoke scene's solutions, none of the study scene's own
+    assert (repo / "results/smoke/N21/solution.npz").exists()
+    assert not list((repo / "results/work_precision").glob("N*/solution.npz"))
+    noop = snakemake(repo, "-n", "work_precision")
+    assert "Nothing to be done" in noop.stdout + noop.stderr
+    assert math.isfinite(df["time_s"].min())

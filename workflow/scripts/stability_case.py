@@ -1,0 +1,9 @@
+"""rule stability_case: one case of the stability atlas, every solver column."""
+
+from signorini.pipeline import job_log
+from signorini.stability import case_stage
+
+snakemake = globals()["snakemake"]  # injected by the script: directive
+
+with job_log(snakemake.log[0]):
+    case_stage(snakemake.params.job, snakemake.output.json, snakemake.output.npz)
