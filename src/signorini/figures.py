@@ -235,7 +235,7 @@ def cost_of_accuracy(df, out_pdf: str | os.PathLike, out_png: str | os.PathLike)
         ax.loglog(total, e, marker="o", markersize=4, label=f"{COST_LABELS.get(norm, norm)} (slope {slope:.2f})")
     e_top = ex[[f"total_{n}" for n in COST_NORMS if f"total_{n}" in ex.columns]].max(axis=1).to_numpy(dtype=float)
     for t, e, N in zip(total, e_top, ex["N"], strict=True):
-        ax.annotate(f"1/{N}", (t, e), textcoords="offset points", xytext=(0, 6), ha="center", fontsize=8)
+        ax.annotate(f"1/{N}", (t, e), textcoords="offset points", xytext=(0, 6), ha="left", fontsize=8, rotation=40)
     e_all = ex[[f"total_{n}" for n in COST_NORMS if f"total_{n}" in ex.columns]].to_numpy(dtype=float)
     ax.set_ylim(np.nanmin(e_all) / 300.0, np.nanmax(e_all) * 4.0)  # room for the legend and the labels
     ax.set_xlabel("total run time: assembly + solve [s]")
