@@ -10,7 +10,7 @@ import os
 
 # One BLAS/OpenMP thread unless the caller says otherwise: the tests use small meshes,
 # where threads buy nothing, and on a loaded 2-core machine busy-waiting BLAS threads
-# slowed the PCG loop of the active-set solver 5-20x (N = 101 cold start: 25 s vs 1.1 s).
+# slowed the (then PCG-based) active-set solver 5-20x (N = 101 cold start: 25 s vs 1.1 s).
 # Must happen before numpy is imported.
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")

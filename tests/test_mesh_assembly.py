@@ -7,10 +7,20 @@ import math
 import numpy as np
 import pytest
 import scipy.sparse as sp
-from skfem import CellBasis, ElementTriP1
+from skfem import BilinearForm, CellBasis, ElementTriP1, LinearForm
+from skfem.helpers import dot, grad
 
 from signorini import Problem
-from signorini.assembly import INTORDER, assemble, load_vector, p1_basis, system_matrix
+from signorini.assembly import (
+    INTORDER,
+    assemble,
+    assemble_bilinear_form,
+    assemble_linear_form,
+    chunk_bases,
+    load_vector,
+    p1_basis,
+    system_matrix,
+)
 from signorini.discrete import build, interpolate_fk
 from signorini.mesh import DIAGONALS, boundary_nodes, friedrichs_keller, mesh_width
 
@@ -306,6 +316,77 @@ def test_load_vector_of_the_manufactured_problem_converges_with_quadrature_order
     b8 = load_vector(p1_basis(mesh), problem)
     b16 = load_vector(p1_basis(mesh, intorder=16), problem)
     assert np.abs(b8 - b16).max() < 1e-4 * np.abs(b16).max()
+
+
+# ---------------------------------------------------------------------------------
+# assembly over chunks of triangles
+# ---------------------------------------------------------------------------------
+
+CHUNKS = [1, 7, 50, 10**6]  # one triangle per chunk, several uneven chunks, one chunk
+
+
+@LinearForm
+def _mixed_linear(v, w):
+    """∫ (x₁² x₂ + w.k) v + sin(x₁) ∂₁v: values, gradients, coordinates and a parameter."""
+    return (w.x[0] ** 2 * w.x[1] + w.k) * v + np.sin(w.x[0]) * v.grad[0]
+
+
+@pytest.mark.parametrize("chunk", [2, 13, 18])
+def test_chunk_bases_cover_every_triangle_once(chunk):
+    mesh = friedrichs_keller(3)  # 18 triangles
+    bases = list(chunk_bases(mesh, chunk))
+    assert len(bases) == math.ceil(18 / chunk)
+    np.testing.assert_array_equal(np.concatenate([b.tind for b in bases]), np.arange(18))
+    for b in bases:
+        assert b.X.shape[1] == 16 and b.N == mesh.p.shape[1]
+        assert b.basis[0][0].shape == (b.tind.size, 16)  # quadrature data of the chunk only
+
+
+@pytest.mark.parametrize("chunk", [0, -3, True])
+def test_chunk_size_must_be_positive(chunk):
+    with pytest.raises(ValueError, match="chunk"):
+        list(chunk_bases(friedrichs_keller(2), chunk))
+
+
+@pytest.mark.parametrize("chunk", CHUNKS)
+@pytest.mark.parametrize("diagonal", DIAGONALS)
+def test_assemble_linear_form_equals_whole_mesh_assembly(chunk, diagonal):
+    mesh = friedrichs_keller(7, diagonal, jitter=0.3)
+    whole = _mixed_linear.assemble(p1_basis(mesh), k=0.25)
+    b = assemble_linear_form(mesh, _mixed_linear, chunk, k=0.25)
+    np.testing.assert_allclose(b, whole, rtol=0, atol=1e-15 * np.abs(whole).max())
+    # a basis as target: its quadrature rule
+    b2 = assemble_linear_form(p1_basis(mesh, intorder=3), _mixed_linear, chunk, k=0.25)
+    whole2 = _mixed_linear.assemble(p1_basis(mesh, intorder=3), k=0.25)
+    np.testing.assert_allclose(b2, whole2, rtol=0, atol=1e-15 * np.abs(whole2).max())
+
+
+@pytest.mark.parametrize("chunk", CHUNKS)
+def test_load_vector_does_not_depend_on_the_chunk_size(chunk):
+    mesh = friedrichs_keller(9, "nw_se")
+    problem = Problem(x0=0.47, c=2.0)
+    whole = LinearForm(lambda v, w: problem.f(w.x) * v).assemble(p1_basis(mesh))
+    b = load_vector(mesh, problem, chunk)
+    np.testing.assert_allclose(b, whole, rtol=0, atol=1e-14 * np.abs(whole).max())
+
+
+@BilinearForm
+def _weighted_laplace(u, v, w):
+    return (1.0 + w.x[0]) * dot(grad(u), grad(v)) + w.x[1] * u * v
+
+
+@pytest.mark.parametrize("chunk", CHUNKS)
+@pytest.mark.parametrize("diagonal", DIAGONALS)
+def test_chunked_bilinear_forms_equal_whole_mesh_assembly(chunk, diagonal):
+    mesh = friedrichs_keller(6, diagonal, jitter=0.2)
+    whole = _weighted_laplace.assemble(p1_basis(mesh, intorder=4)).tocsr()
+    A = assemble_bilinear_form(mesh, _weighted_laplace, chunk, intorder=4)
+    assert A.format == "csr" and A.has_sorted_indices
+    assert abs(A - whole).max() <= 1e-15 * abs(whole).max()
+    A_sys = system_matrix(mesh, 1.5, chunk=chunk)
+    A_ref = system_matrix(p1_basis(mesh), 1.5)
+    assert abs(A_sys - A_ref).max() <= 1e-15 * abs(A_ref).max()
+    assert A_sys.nnz == A_ref.nnz  # same sparsity pattern
 
 
 def test_build_bundles_a_consistent_discrete_problem():

@@ -6,16 +6,20 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import yaml
+from skfem import LinearForm
 
 from signorini import Problem
+from signorini.assembly import p1_basis, system_matrix
 from signorini.discrete import build, solve_discrete
 from signorini.mesh import friedrichs_keller
+from signorini.solvers.linalg import factorize
 from signorini.theory import (
     boundary_h12_norm,
     contact_set,
     expected_rate,
     h1_norm_p1,
     ritz_projection,
+    ritz_rhs,
     supercloseness,
 )
 
@@ -36,6 +40,39 @@ def test_ritz_projection_reproduces_p1_functions():
     mesh = friedrichs_keller(6)
     r = ritz_projection(_Linear(), mesh)
     np.testing.assert_allclose(r, _Linear().u(mesh.p), atol=1e-12)
+
+
+def _ritz_rhs_whole_mesh(problem, mesh):
+    """The unchunked reference: the Ritz right-hand side on one degree-8 basis over the whole mesh."""
+
+    @LinearForm
+    def rhs(v, w):
+        gu = problem.grad_u(w.x)
+        return gu[0] * v.grad[0] + gu[1] * v.grad[1] + problem.c * problem.u(w.x) * v
+
+    return rhs.assemble(p1_basis(mesh))
+
+
+@pytest.mark.parametrize("chunk", [1, 37, 100, 10**6])
+@pytest.mark.parametrize("diagonal", ["sw_ne", "nw_se"])
+def test_chunked_ritz_rhs_equals_the_whole_mesh_assembly(chunk, diagonal):
+    problem = Problem(x0=0.47, c=2.5)
+    mesh = friedrichs_keller(12, diagonal, jitter=0.2)  # 288 triangles: 288, 8, 3 or 1 chunk(s)
+    whole = _ritz_rhs_whole_mesh(problem, mesh)
+    np.testing.assert_allclose(ritz_rhs(problem, mesh, chunk), whole, rtol=0, atol=1e-14 * np.abs(whole).max())
+
+
+@pytest.mark.parametrize("diagonal", ["sw_ne", "nw_se"])
+def test_ritz_projection_is_unchanged_by_chunking(diagonal):
+    """R_h u and ‖R_h u - u_h‖ agree with the whole-mesh assembly (several chunks) to round-off."""
+    problem = Problem(x0=0.47, c=2.5)
+    mesh = friedrichs_keller(16, diagonal)  # 512 triangles
+    reference = factorize(system_matrix(p1_basis(mesh), problem.c))(_ritz_rhs_whole_mesh(problem, mesh))
+    for chunk in (37, 10**6):
+        r = ritz_projection(problem, mesh, chunk=chunk)
+        np.testing.assert_allclose(r, reference, rtol=0, atol=1e-13 * np.abs(reference).max())
+    u_h = problem.u(mesh.p)
+    assert supercloseness(problem, mesh, u_h, chunk=37) == pytest.approx(supercloseness(problem, mesh, u_h), rel=1e-12)
 
 
 def test_h1_norm_of_p1_function_is_exact():
@@ -96,8 +133,14 @@ def test_theory_target_end_to_end(tmp_path):
     from test_pipeline import copy_repo, snakemake
 
     repo = copy_repo(tmp_path)
-    small = {"scenes": {"theory": {"N": [9, 17, 33], "norms": ["L2", "L4", "L8", "Linf", "W12", "W14", "W1inf",
-                                                              "H1", "H12", "L4plus", "L4minus"]}}}
+    small = {
+        "scenes": {
+            "theory": {
+                "N": [9, 17, 33],
+                "norms": ["L2", "L4", "L8", "Linf", "W12", "W14", "W1inf", "H1", "H12", "L4plus", "L4minus"],
+            }
+        }
+    }
     (repo / "small.yaml").write_text(yaml.safe_dump(small))
     snakemake(repo, "-c2", "theory", "--configfile", "small.yaml")
     md = (repo / "paper_figures/theory.md").read_text()

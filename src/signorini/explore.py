@@ -344,7 +344,7 @@ class _Collect(logging.Handler):
 
 def active_set_history(disc, **options):
     """Solve ``disc`` with the active-set solver and return ``(result, history)``: one row per
-    Newton step (active nodes, changes, factorisations and CG steps so far), read from the
+    Newton step (active nodes, changes, factorisations and low-rank correction columns so far), read from the
     solver's own DEBUG log messages (``signorini.solvers.active_set``)."""
     import pandas as pd
 
@@ -362,7 +362,7 @@ def active_set_history(disc, **options):
     rows: list[dict] = []
     for rec in handler.records:
         if rec.msg.startswith("iteration") and len(rec.args) == 5:
-            it, active, changes, factorizations, cg = rec.args
+            it, active, changes, factorizations, columns = rec.args
             if int(it) == 1:  # a new solve (the warm-start cascade solves coarser meshes first)
                 rows = []
             rows.append(
@@ -371,7 +371,7 @@ def active_set_history(disc, **options):
                     "active": int(active),
                     "changes": int(changes),
                     "factorizations": int(factorizations),
-                    "cg_steps": int(cg),
+                    "correction_columns": int(columns),
                 }
             )
     return result, pd.DataFrame(rows)

@@ -11,7 +11,7 @@ mathematics predicts for them:
     ``u ↦ s u`` (amplitude ``A``).  ``(S_h)`` is positively homogeneous, ``u_h(s f) = s u_h(f)``
     with the same contact set, so every relative quantity must agree to round-off.  This
     holds for a solver only if all its thresholds are relative: the active-set method's are
-    (hysteresis ``1e-13 max(|λ|, |b|)``, ``1e-13 ‖u‖``, PCG ``1e-14 ‖rhs‖``); the QP solvers
+    (hysteresis ``1e-13 max(|λ|, |b|)``, ``1e-13 ‖u‖``, refinement below ``4 ε |A||u|``); the QP solvers
     behind cvxpy stop on absolute tolerances unless ``normalize=True``
     (``solvers.cvxpy_qp``).
 ``reaction``

@@ -17,7 +17,7 @@ rule norm:
         "../envs/signorini.yaml"
     threads: 1
     resources:
-        mem_mb=lambda wc: 500 + int(wc.N) ** 2 // 250,
+        mem_mb=lambda wc: 500 + int(wc.N) ** 2 // 2000,  # measured: 0.4 GB at N = 1001
         runtime=lambda wc: 5 + int(wc.N) ** 2 // 50000,
     params:
         problem=lambda wc: scene_of(wc)["problem"],

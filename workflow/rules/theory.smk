@@ -29,7 +29,7 @@ rule theory_quantities:
         "../envs/signorini.yaml"
     threads: 1
     resources:
-        mem_mb=lambda wc: 1000 + int(wc.N) ** 2 // 200,
+        mem_mb=lambda wc: 1000 + int(wc.N) ** 2 // 500,  # 4.7 GB at N = 1001 before chunking
         runtime=lambda wc: 5 + int(wc.N) ** 2 // 50000,
     params:
         problem=lambda wc: scene_of(wc)["problem"],
