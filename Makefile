@@ -4,6 +4,8 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-from-lock
 UV_VERSION := 0.13.8
+# uv gives up compiling a file after 60 s, which a heavily loaded 2-core machine can exceed
+export UV_COMPILE_BYTECODE_TIMEOUT ?= 600
 CORES ?= 2
 
 .PHONY: setup all test lock lint dag bench clean-results
