@@ -4,6 +4,7 @@ rates, and the `theory` target run end to end on a small version of the scene.""
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 import yaml
 from skfem import LinearForm
@@ -147,3 +148,19 @@ def test_theory_target_end_to_end(tmp_path):
     assert "Supercloseness" in md and "| L4 |" in md
     for name in ("theory_rates.png", "theory_extra.png", "theory.csv"):
         assert (repo / "paper_figures" / name).stat().st_size > 0
+
+
+def test_table2_rows_give_the_eoc_of_each_mesh_pair():
+    """``table2_rows``: e = C h^r gives EOC r on every consecutive pair, in the paper's norms
+    present, meshes sorted by N; the findings render them with the expected orders."""
+    from signorini.theory_report import TABLE2_NORMS, table2_rows
+
+    N = np.array([1001, 101, 201, 2001])
+    h = 1.0 / N
+    errors = pd.DataFrame({"N": N, "h": h, "L4": 3.0 * h**2, "W1inf": 0.7 * h**0.5, "L2": h**2})
+    t2 = table2_rows(errors)
+    assert list(t2.columns) == ["pair", "L4", "W1inf"]  # only Table 2's norms, in its order
+    assert list(t2["pair"]) == ["1/101 → 1/201", "1/201 → 1/1001", "1/1001 → 1/2001"]
+    np.testing.assert_allclose(t2["L4"], 2.0, rtol=1e-12)
+    np.testing.assert_allclose(t2["W1inf"], 0.5, rtol=1e-12)
+    assert set(TABLE2_NORMS) >= {"L4", "Linf", "W14", "W1inf", "H12"}
