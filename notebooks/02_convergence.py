@@ -36,6 +36,7 @@ from IPython.display import display
 from signorini import explore
 from signorini.figures import FIGURE3_LABELS, FIGURE3_NORMS, REFERENCE_SLOPES
 from signorini.tables import LABELS_MD, LABELS_TEX, THEORETICAL_ORDERS
+from signorini.theory_report import table2_rows
 
 scene = explore.locate_scene()
 print(f"scene {scene.name!r} under {scene.dir}: N = {scene.Ns}, norms {scene.norms}")
@@ -139,3 +140,24 @@ print(f"p = {p}: expected orders {lp_name} {explore.expected_orders(p)[0]:.4f}, 
       f"{w1p_name} {explore.expected_orders(p)[1]:.4f} (each minus ε)")
 display(rate_errors)
 display(rates.round(4))
+
+# %% [markdown]
+# ## Beyond the paper: the theory scene
+#
+# `snakemake -c2 theory` (not part of `all`) extends the meshes to `N = 1001, 2001` and adds
+# the rate against `p`, supercloseness, the discrete `H^{1/2}(∂Ω)` norm, the one-sided `L⁴`
+# parts and the contact set (`paper_figures/theory.*`). The cell shows the rendered findings
+# and figures when they exist, and Table 2 continued to the finest meshes from the scene's
+# cached `results/theory/errors.csv` (`signorini.theory_report.table2_rows`).
+
+# %%
+theory_outputs = explore.existing(
+    scene.root, "paper_figures/theory_rates.png", "paper_figures/theory_extra.png", "paper_figures/theory.md"
+)
+for obj in explore.display_artifacts(theory_outputs):
+    display(obj)
+theory_errors = scene.root / "results" / "theory" / "errors.csv"
+if theory_errors.exists():
+    display(table2_rows(pd.read_csv(theory_errors)).set_index("pair").round(3))
+elif not theory_outputs:
+    print("The theory scene has not been built: run `.venv/bin/snakemake -c2 theory` (about an hour with N = 2001).")
