@@ -444,3 +444,21 @@ def test_fine_solve_costs_one_factorisation_and_few_solves():
     res = solve_discrete(disc)
     assert res.info["factorizations"] == 1
     assert res.info["triangular_solves"] <= 2 + res.info["correction_columns"] <= 12
+
+
+def test_an_older_in_place_factor_refuses_to_solve(cache):
+    """CHOLMOD refactorises in place (one symbolic analysis per pattern): after a second
+    factorisation the first ``solve`` would silently use the new numbers, so it raises."""
+    from signorini.solvers.linalg import Factorizer, available_backends
+
+    if "cholmod" not in available_backends():
+        pytest.skip("cholmod not installed")
+    A = sp.csr_matrix(cache.discrete({}, 11).A)
+    factorizer = Factorizer(A, "cholmod")
+    first = factorizer(A.data)
+    y = np.ones(A.shape[0])
+    np.testing.assert_allclose(A @ first(y), y, atol=1e-12)
+    second = factorizer(2.0 * A.data)
+    np.testing.assert_allclose(2.0 * (A @ second(y)), y, atol=1e-12)
+    with pytest.raises(RuntimeError, match="stale"):
+        first(y)
