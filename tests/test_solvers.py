@@ -13,6 +13,7 @@ import scipy.sparse.linalg as spla
 
 from signorini import Problem
 from signorini.discrete import build, solve_discrete
+from signorini.mesh import boundary_nodes, friedrichs_keller
 from signorini.solvers import (
     SOLVERS,
     BadInputError,
@@ -462,3 +463,39 @@ def test_an_older_in_place_factor_refuses_to_solve(cache):
     np.testing.assert_allclose(2.0 * (A @ second(y)), y, atol=1e-12)
     with pytest.raises(RuntimeError, match="stale"):
         first(y)
+
+
+def test_zero_data_semicoercive_problem_gives_zero():
+    """f ≡ 0, c = 0: A = K is singular and every u = t ≥ 0 solves the QP. The active-set
+    method keeps the degenerate (u = λ = 0) boundary in contact and returns u = 0, certified."""
+    from signorini.assembly import p1_basis, system_matrix
+
+    mesh = friedrichs_keller(12)
+    K = system_matrix(p1_basis(mesh, intorder=2), 0.0)
+    res = active_set_solve(K, np.zeros(K.shape[0]), boundary_nodes(mesh))
+    assert res.certificate.ok and np.all(res.u == 0.0)
+
+
+def test_unbounded_semicoercive_problem_raises_a_named_error():
+    """c = 0 with a load pushing the whole boundary inwards (b > 0): u = t·1 drives the energy
+    to −∞, no minimiser exists; a named error, never a raw LinAlgError or a "certified" u."""
+    from signorini.assembly import p1_basis, system_matrix
+
+    mesh = friedrichs_keller(12)
+    basis = p1_basis(mesh, intorder=2)
+    K, M = system_matrix(basis, 0.0), system_matrix(basis, 1.0) - system_matrix(basis, 0.0)
+    # CHOLMOD either stops at a zero pivot or returns u ~ 1e13 with an O(1) residual, which the
+    # certificate must not pass off as a rounding floor
+    with pytest.raises((NotConvergedError, KKTError)):
+        active_set_solve(K, M @ np.ones(K.shape[0]), boundary_nodes(mesh))
+
+
+def test_rounding_floor_is_capped():
+    """The certificate's rounding floor ``16 ε ‖|A||u|‖∞/σ`` admits cancellation, not an
+    exploded u: a residual of 0.5 is never certified, however large u is."""
+    A = sp.csr_matrix(np.array([[1.0, -1.0], [-1.0, 1.0]]))  # K of one interval: A 1 = 0
+    u = np.array([1e15, 1e15])  # A u cancels exactly; |A||u| = 2e15
+    b = np.array([1.0, 1.0])  # relative stationarity ‖A u - b‖∞ / ‖b‖∞ = 1
+    cert = kkt_certificate(A, b, np.array([0]), u, np.zeros(1), 1e-10)
+    assert cert.floor > 1.0 and cert.stationarity == 1.0
+    assert not cert.ok

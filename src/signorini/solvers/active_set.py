@@ -180,14 +180,23 @@ def active_set_solve(
             if bordered is not None:
                 n_solves += bordered.solves
                 n_columns += len(bordered.columns)
-            bordered = BorderedSolver(A, factorizer(_clamped_values(A, rows, free)), free)
+            try:
+                factor = factorizer(_clamped_values(A, rows, free))
+            except np.linalg.LinAlgError as err:  # c = 0 and too few contact nodes: A_FF singular
+                raise NotConvergedError(
+                    f"active set of {int(active.sum())} nodes leaves a singular system ({err}); "
+                    "with c = 0 the minimiser is then not unique"
+                ) from err
+            bordered = BorderedSolver(A, factor, free)
             n_factor += 1
         u = bordered(free, b)  # rows outside F are ignored, so b's solve is reused across steps
         lam = np.where(active, (A @ u - b)[B], 0.0)
-        # hysteresis below round-off keeps degenerate (u = λ = 0) nodes from flip-flopping
+        # hysteresis below round-off keeps degenerate (u = λ = 0) nodes from flip-flopping;
+        # ≥ keeps them when everything vanishes (f ≡ 0: eps_lam = 0), where releasing the
+        # whole boundary would leave the singular K of c = 0 to factorise
         eps_lam = 1e-13 * max(np.abs(lam).max(initial=0.0), np.abs(b).max(initial=0.0))
         eps_u = 1e-13 * np.abs(u).max(initial=0.0)
-        keep = active & (lam > -eps_lam)
+        keep = active & (lam >= -eps_lam)
         grow = ~active & (u[B] < -eps_u)
         if frontier_growth:
             # Grow the contact set only at its ends while that is possible.  An

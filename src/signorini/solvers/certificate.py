@@ -19,8 +19,9 @@ of that size.  When ``A u`` cancels (smooth data: ``u ≡ 1`` gives ``K u = 0``,
 best double-precision solution is ``≈ ε ‖|A||u|‖∞ / σ = O(ε/h²)`` (7e-11 at N = 201, 1.8e-9 at
 N = 1001 for ``f ≡ 1, c = 1``; a plain Cholesky solve left 5.6e-10 and 5.8e-8: stability
 atlas), above any 1e-10 tolerance.  The certificate therefore
-accepts residuals up to ``max(tol, floor)`` with ``floor = 16 ε ‖|A||u|‖∞ / σ`` (16 covers
-the 7 products of a P1 row and the rounding of u itself).  For the paper's data the floor is
+accepts residuals up to ``max(tol, min(floor, 1e-6))`` with ``floor = 16 ε ‖|A||u|‖∞ / σ`` (16
+covers the 7 products of a P1 row and the rounding of u itself; the cap keeps an exploded ``u``
+of a singular system from certifying itself).  For the paper's data the floor is
 far below 1e-10 (1.6e-12 at N = 501, growing like N²).  ``tol = 0`` demands exact zeros (no floor).
 """
 
@@ -33,6 +34,9 @@ import scipy.sparse as sp
 
 _TINY = np.finfo(float).tiny
 ROUNDOFF_FACTOR = 16.0  # the floor is ROUNDOFF_FACTOR · ε · ‖|A||u|‖∞ / σ (module docstring)
+# ...but never above this: a huge ‖|A||u|‖∞ / σ means u exploded (e.g. a singular system of an
+# unbounded QP, u ~ 1e13), not cancellation, and its O(1) residual must not be certified
+FLOOR_CAP = 1e-6
 
 
 class KKTError(RuntimeError):
@@ -62,8 +66,8 @@ class Certificate:
 
     @property
     def threshold(self) -> float:
-        """What the residuals are compared with: ``max(tol, floor)``; exactly 0 when ``tol = 0``."""
-        return max(self.tol, self.floor) if self.tol > 0.0 else 0.0
+        """What the residuals are compared with: ``max(tol, min(floor, FLOOR_CAP))``; exactly 0 when ``tol = 0``."""
+        return max(self.tol, min(self.floor, FLOOR_CAP)) if self.tol > 0.0 else 0.0
 
     @property
     def worst(self) -> float:

@@ -127,7 +127,10 @@ class Factorizer:
         from cvxopt import cholmod, matrix
 
         self._matrix.V = matrix(data[self._lower])
-        cholmod.numeric(self._matrix, self._symbolic)  # ArithmeticError unless positive definite
+        try:
+            cholmod.numeric(self._matrix, self._symbolic)
+        except ArithmeticError as err:  # cvxopt: the column of the first non-positive pivot
+            raise np.linalg.LinAlgError(f"matrix is not positive definite (CHOLMOD: pivot {err})") from err
         check, factor, n = self._current(), self._symbolic, self.n
 
         def solve(y: np.ndarray) -> np.ndarray:
@@ -174,7 +177,7 @@ def is_positive_definite(A: sp.spmatrix, prefer: str = "auto") -> bool:
     if backend != "superlu":  # supernodal CHOLMOD (LLᵀ) and PARDISO's SPD mode stop at a bad pivot
         try:
             Factorizer(A, backend)(A.data)
-        except (ArithmeticError, ValueError, RuntimeError):
+        except (np.linalg.LinAlgError, ValueError, RuntimeError):
             return False
         return True
     try:
