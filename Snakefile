@@ -1,5 +1,5 @@
-# Reproduces Tables 1-2 and Figures 2-3 of Christof & Haubner (scalar Signorini problem).
-# Stages: solve -> norm -> errors/eoc -> tables/figures; see README.md.
+# Reproduces Tables 1-2 and Figures 2-3 of Christof & Haubner (scalar Signorini problem), Section 7.
+# The chain per scene and N: discretise -> solve -> norm -> errors/eoc -> tables/figures; see README.md.
 import os
 
 from snakemake.utils import min_version, validate
@@ -15,20 +15,22 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 configfile: "workflow/config.yaml"
 
 
-validate(config, "workflow/schemas/config.schema.yaml")
+validate(
+    config, "workflow/schemas/config.schema.yaml"
+)  # also fills in the schema's defaults
 
 
 include: "workflow/rules/common.smk"
-include: "workflow/rules/solve.smk"
-include: "workflow/rules/norms.smk"
-include: "workflow/rules/render.smk"
+include: "workflow/rules/scene.smk"
+include: "workflow/rules/paper.smk"
 include: "workflow/rules/theory.smk"
 include: "workflow/rules/work_precision.smk"
 include: "workflow/rules/stability.smk"
 
 
 rule all:
+    """Tables 1-2, Figures 2-3, the reproduction report and the run times (paper_figures/)."""
     default_target: True
     input:
-        PAPER_FIGURES,
+        PAPER_OUTPUTS,
     localrule: True

@@ -21,10 +21,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from signorini.artifacts import load_npz, save_npz
-from signorini.discrete import build, solve_discrete
-from signorini.norms import H12_FORMS, MAX_POINTS, QUADRATURES, W1P_FORMS, Conventions, error_field, parse_norm
-from signorini.problem import Problem
+from signorini.fem.discrete import build
+from signorini.fem.norms import H12_FORMS, MAX_POINTS, QUADRATURES, W1P_FORMS, Conventions, error_field, parse_norm
+from signorini.fem.problem import Problem
+from signorini.fem.solve import solve_discrete
+from signorini.pipeline.artifacts import load_npz, save_npz
 
 ROOT = Path(__file__).resolve().parents[1]
 COLUMNS = ("L4", "Linf", "W14", "W1inf", "H12")

@@ -40,12 +40,13 @@ from pathlib import Path
 
 import numpy as np
 
-from signorini import Problem
-from signorini.artifacts import save_json
-from signorini.assembly import load_vector, p1_basis, system_matrix
-from signorini.discrete import DiscreteProblem, build, solve_discrete
-from signorini.mesh import boundary_nodes, friedrichs_keller
-from signorini.norms import evaluate_norms
+from signorini.fem.assembly import load_vector, p1_basis, system_matrix
+from signorini.fem.discrete import DiscreteProblem, build
+from signorini.fem.mesh import boundary_nodes, friedrichs_keller
+from signorini.fem.norms import evaluate_norms
+from signorini.fem.problem import Problem
+from signorini.fem.solve import solve_discrete
+from signorini.pipeline.artifacts import save_json
 from signorini.solvers import cvxpy_solve
 from signorini.solvers.linalg import backend_name, factorize
 

@@ -16,9 +16,10 @@ from pathlib import Path
 
 import pandas as pd
 
-from signorini.discrete import build, solve_discrete
-from signorini.norms import Conventions, compute_norms, error_field
-from signorini.problem import Problem
+from signorini.fem.discrete import build
+from signorini.fem.norms import Conventions, compute_norms, error_field
+from signorini.fem.problem import Problem
+from signorini.fem.solve import solve_discrete
 from signorini.solvers import cvxpy_solve
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -20,7 +20,7 @@
 # `-Δu + c u = f` and the Signorini conditions `u ≥ 0`, `∂_n u ≥ 0`, `u ∂_n u = 0` on `∂Ω`.
 # The exact solution is manufactured: `u = A ψ(r) ũ(r, θ)` with `ũ = -r^{3/2} sin(3θ/2)`
 # in polar coordinates around the free point `(x0, 0) = (0.5, 0)`, a degree-9 cut-off
-# `ψ` with support radius `R = 0.45`, and `f = -Δu + c u` (`signorini.problem.Problem`).
+# `ψ` with support radius `R = 0.45`, and `f = -Δu + c u` (`signorini.fem.problem.Problem`).
 #
 # This notebook reads the scene chosen by `signorini.explore.locate_scene`: `paper` if the
 # pipeline has built it (`make all`), else `smoke` (built here with Snakemake if missing;
@@ -35,7 +35,8 @@ from matplotlib.colors import LogNorm
 from matplotlib.tri import Triangulation
 
 from signorini import explore
-from signorini.mesh import boundary_nodes, mesh_width
+from signorini.fem.mesh import boundary_nodes, mesh_width
+from signorini.studies.paper.figures import figure2
 
 scene = explore.locate_scene()
 problem = scene.problem
@@ -54,20 +55,15 @@ print(problem)
 fields = scene.fields()
 X, Y = fields["x"], fields["y"]
 fig = plt.figure(figsize=(11, 9))
+surfaces, contours = fig.subfigures(2, 1)
+figure2(fields, fig=surfaces)  # the paper's Figure 2, as in paper_figures/figure2.png
 titles = {"u": "solution $u$", "f": r"right-hand side $f = -\Delta u + c\,u$"}
-for k, key in enumerate(("u", "f")):
-    ax = fig.add_subplot(2, 2, k + 1, projection="3d")
-    ax.plot_surface(X, Y, fields[key], cmap="viridis", rstride=2, cstride=2, linewidth=0.1, edgecolor="k")
-    ax.set(xlabel="$x_1$", ylabel="$x_2$", title=titles[key])
-    ax.view_init(elev=28, azim=-125)
-    ax.set_box_aspect((1.0, 1.0, 0.6))
-    ax = fig.add_subplot(2, 2, k + 3)
+for ax, key in zip(contours.subplots(1, 2), ("u", "f"), strict=True):
     cs = ax.contourf(X, Y, fields[key], levels=30, cmap="viridis")
     ax.contour(X, Y, fields[key], levels=[0.0], colors="w", linewidths=0.8)
     ax.plot(problem.x0, 0.0, "o", color="w", markeredgecolor="k")
     ax.set(xlabel="$x_1$", ylabel="$x_2$", aspect="equal", title=f"{titles[key]} (contours, white: 0)")
-    fig.colorbar(cs, ax=ax, shrink=0.8)
-fig.tight_layout()
+    contours.colorbar(cs, ax=ax, shrink=0.8)
 plt.show()
 
 # %% [markdown]
@@ -177,7 +173,7 @@ print(f"on the rest of the exact contact set (biactive, u = ∂_n u = 0) u_h ≥
 # ## Where the error sits: the pointwise error map
 #
 # Per triangle, `max |u − u_h|` over the `L^∞` point set and `max |∇(u − u_h)|` over the
-# `W^{1,∞}` point set (the scene's norm conventions; `signorini.norms.error_field`). The
+# `W^{1,∞}` point set (the scene's norm conventions; `signorini.fem.norms.error_field`). The
 # gradient error is singular at the free point `(0.5, 0)`, where `u ~ r^{3/2}`. The value
 # error concentrates there too, but only once `h` is small enough: its `O(h^{3/2})` peak at
 # the free point competes with the `O(h²)` interpolation error of the smooth but strongly

@@ -34,9 +34,9 @@ import pandas as pd
 from IPython.display import display
 
 from signorini import explore
-from signorini.figures import FIGURE3_LABELS, FIGURE3_NORMS, REFERENCE_SLOPES
-from signorini.tables import LABELS_MD, LABELS_TEX, THEORETICAL_ORDERS
-from signorini.theory_report import table2_rows
+from signorini.paper import THEORETICAL_ORDERS, label_md, label_tex
+from signorini.studies.paper.figures import figure3
+from signorini.studies.theory.report import table2_rows
 
 scene = explore.locate_scene()
 print(f"scene {scene.name!r} under {scene.dir}: N = {scene.Ns}, norms {scene.norms}")
@@ -68,23 +68,18 @@ table2.style.format("{:.4f}", subset=[c for c in table2.columns if c[1] != "dev.
 # %% [markdown]
 # ## Figure 3: `L⁴` and `W^{1,4}` errors against `h`
 #
-# As `paper_figures/figure3.png` (`signorini.figures.figure3`): reference lines `h²` and `h`
-# through the coarsest point, halved; the paper's published values as crosses.
+# As `paper_figures/figure3.png` (`signorini.studies.paper.figures.figure3`, drawn on this
+# notebook's axes): reference lines `h²` and `h` through the coarsest point, halved; the paper's
+# published values added as crosses.
 
 # %%
 paper1 = explore.paper_reference(1, scene.root)
 paper_h = np.array([1.0 / int(lab[2:]) for lab in paper1.index])
 h = errors["h"].to_numpy()
 fig, ax = plt.subplots(figsize=(6.5, 4.8))
-for norm, marker in zip(FIGURE3_NORMS, "os", strict=True):
-    e = errors[norm].to_numpy()
-    (line,) = ax.loglog(h, e, marker=marker, label=f"{FIGURE3_LABELS[norm]} (ours, {scene.name})")
-    order = REFERENCE_SLOPES[norm]
-    ax.loglog(h, 0.5 * e[h.argmax()] * (h / h.max()) ** order, "--", color=line.get_color(), alpha=0.7,
-              label=f"$h^{{{order:g}}}$ (reference)")
+figure3(errors, ax=ax)
+for line, norm in zip(ax.get_lines()[::2], ("L4", "W14"), strict=True):
     ax.loglog(paper_h, paper1[norm], "x", color=line.get_color(), markersize=8, label=f"{norm} (paper, Table 1)")
-ax.set(xlabel="mesh width $h$", ylabel="error", title=r"$L^4$- and $W^{1,4}$-errors")
-ax.grid(True, which="both", linewidth=0.3, alpha=0.6)
 ax.legend(fontsize=8)
 plt.show()
 
@@ -99,10 +94,10 @@ eoc_rows = eoc[eoc["N"] != "regression"]
 regr = eoc[eoc["N"] == "regression"].iloc[0]
 fig, axes = plt.subplots(1, 2, figsize=(13, 4.8))
 for norm in scene.norms:
-    (line,) = axes[0].loglog(h, errors[norm], marker="o", markersize=4, label=LABELS_TEX.get(norm, norm))
+    (line,) = axes[0].loglog(h, errors[norm], marker="o", markersize=4, label=label_tex(norm))
     color = line.get_color()
     axes[1].semilogx(eoc_rows["h"].astype(float), eoc_rows[norm].astype(float), marker="o", color=color,
-                     label=LABELS_TEX.get(norm, norm))
+                     label=label_tex(norm))
     if norm in THEORETICAL_ORDERS:
         axes[1].axhline(THEORETICAL_ORDERS[norm], color=color, linestyle="--", linewidth=0.8)
     axes[1].axhline(float(regr[norm]), color=color, linestyle=":", linewidth=0.8)
@@ -117,7 +112,7 @@ plt.show()
 summary = pd.DataFrame({
     "regression slope": [float(regr[n]) for n in scene.norms],
     "expected (− ε)": [THEORETICAL_ORDERS.get(n, math.nan) for n in scene.norms],
-}, index=[LABELS_MD.get(n, n) for n in scene.norms])
+}, index=[label_md(n) for n in scene.norms])
 summary["slope − expected"] = summary["regression slope"] - summary["expected (− ε)"]
 summary.round(4)
 
@@ -128,7 +123,7 @@ summary.round(4)
 # minus ε) are `2` and `1` for `p ≤ 4`, and `3/2 + 2/p` and `1/2 + 2/p` beyond
 # (`signorini.explore.expected_orders`). The errors are the pipeline's cached norm values
 # where a norm job exists (e.g. `p = 4, 16, ∞`), else they are evaluated now on the cached
-# solutions with `signorini.norms.evaluate_norms` and the scene's conventions (a few seconds
+# solutions with `signorini.fem.norms.evaluate_norms` and the scene's conventions (a few seconds
 # per mesh of the paper scene).
 
 # %%
@@ -148,7 +143,7 @@ display(rates.round(4))
 # the rate against `p`, supercloseness, the discrete `H^{1/2}(∂Ω)` norm, the one-sided `L⁴`
 # parts and the contact set (`paper_figures/theory.*`). The cell shows the rendered findings
 # and figures when they exist, and Table 2 continued to the finest meshes from the scene's
-# cached `results/theory/errors.csv` (`signorini.theory_report.table2_rows`).
+# cached `results/theory/errors.csv` (`signorini.studies.theory.report.table2_rows`).
 
 # %%
 theory_outputs = explore.existing(

@@ -31,9 +31,10 @@ import pandas as pd
 from IPython.display import display
 
 from signorini import explore
-from signorini.discrete import build, solve_discrete
-from signorini.mesh import mesh_width
-from signorini.norms import evaluate_norms
+from signorini.fem.discrete import build
+from signorini.fem.mesh import mesh_width
+from signorini.fem.norms import evaluate_norms
+from signorini.fem.solve import solve_discrete
 
 scene = explore.locate_scene()
 print(f"scene {scene.name!r} under {scene.dir}: N = {scene.Ns}")

@@ -31,9 +31,11 @@ import numpy as np
 import pandas as pd
 from IPython.display import display
 
-from signorini import Problem, explore
-from signorini.discrete import build, solve_discrete
-from signorini.norms import evaluate_norms
+from signorini import explore
+from signorini.fem.discrete import build
+from signorini.fem.norms import evaluate_norms
+from signorini.fem.problem import Problem
+from signorini.fem.solve import solve_discrete
 
 scene = explore.locate_scene()
 print(f"scene {scene.name!r} under {scene.dir}: N = {scene.Ns}")

@@ -1,7 +1,8 @@
-"""Shared fixtures for the numerical-core tests.
+"""Shared fixtures: the numerical core's small cases and the built repository copy.
 
 Everything here is small (N ≤ 101) so that the whole suite stays fast; expensive
-objects (assembled systems, exact discrete solutions) are built once per session.
+objects (assembled systems, exact discrete solutions, the built workflow) are built once
+per session.
 """
 
 from __future__ import annotations
@@ -15,11 +16,16 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
+import time  # noqa: E402
+
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
+import yaml  # noqa: E402
+from helpers import PROBLEM, copy_repo, snakemake  # noqa: E402
 
-from signorini import Problem  # noqa: E402
-from signorini.discrete import build, solve_discrete  # noqa: E402
+from signorini.fem.discrete import build  # noqa: E402
+from signorini.fem.problem import Problem  # noqa: E402
+from signorini.fem.solve import solve_discrete  # noqa: E402
 
 # (problem parameters, N, diagonal): the small meshes every solver test uses.  The
 # free points are chosen so that no boundary vertex coincides with (x0, 0).
@@ -68,3 +74,77 @@ def small_case(request, cache):
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(20240607)
+
+
+# --- the workflow, built once ---------------------------------------------------------------
+
+# Small versions of the studies beyond the paper (what `tests/test_theory.py`,
+# `test_work_precision.py` and `test_stability.py` check end to end), next to the smoke scene
+# and a scene added by the user.  They replace the shipped scenes in the built copy.
+TEST_SCENES = {
+    "mine": {"N": [8, 16], "norms": ["L2", "H1"], "solver": "active_set", "problem": PROBLEM},
+    "theory": {
+        "N": [9, 17, 33],
+        "norms": ["L2", "L4", "L8", "Linf", "W12", "W14", "W1inf", "H1", "H12", "L4plus", "L4minus"],
+        "solver": "active_set",
+        "problem": PROBLEM,
+    },
+    "work_precision": {
+        "N": [11, 21],
+        "norms": ["L4", "W14"],
+        "solver": "active_set",
+        "problem": PROBLEM,
+        "study": {
+            "source": "smoke",
+            "tolerances": [1e-2, 1e-8],
+            "time_limit_s": 30,
+            "figure_N": [11, 21],
+            "configs": {"active_set": {"solver": "active_set", "label": "active set"}},
+            "qp_solvers": ["OSQP"],
+        },
+    },
+    "stability": {
+        "N": [9],
+        "norms": ["L4", "L16", "Linf", "W14", "W116", "W1inf", "H12"],
+        "solver": "active_set",
+        "problem": PROBLEM,
+        "atlas": {
+            "timeout_s": 60,
+            "solvers": {
+                "active_set": {"solver": "active_set"},
+                "osqp": {"solver": "cvxpy_osqp", "options": {"normalize": True, "tol": 1e-8, "time_limit": 60}},
+                "osqp_raw": {"solver": "cvxpy_osqp", "options": {"tol": 1e-8, "time_limit": 60}},
+            },
+            "default_solvers": ["active_set", "osqp", "osqp_raw"],
+            "cases": [
+                {"name": "A_1e-9", "group": "scaling", "N": 9, "problem": {"A": 1e-9}, "reference": "A_1"},
+                {"name": "A_1", "group": "scaling", "N": 9, "problem": {"A": 1.0}},
+                {"name": "c_1e-06", "group": "reaction", "N": 9, "problem": {"c": 1e-6}},
+                {"name": "c_1e+06", "group": "reaction", "N": 9, "problem": {"c": 1e6}},
+                {"name": "N2", "group": "mesh", "N": 2, "solvers": ["active_set", "osqp"]},
+                {"name": "jitter", "group": "mesh", "N": 9, "jitter": 0.2, "solvers": ["active_set"]},
+                {"name": "f_zero", "group": "degenerate", "N": 9, "problem": {"A": 0.0}},
+                {"name": "bad_spd", "group": "bad_input", "N": 9, "corrupt": "non_spd", "solvers": ["active_set"]},
+            ],
+        },
+    },
+}
+# every target of the built copy: the paper's outputs from the smoke scene and the three studies
+BUILT_TARGETS = ("all", "theory", "work_precision", "stability", "results/mine/errors.csv", "results/mine/eoc.csv")
+
+
+@pytest.fixture(scope="session")
+def built_repo(tmp_path_factory):
+    """A repository copy whose config holds the smoke scene, the paper scene, ``TEST_SCENES`` and
+    ``figures_scene: smoke``, with every target of ``BUILT_TARGETS`` built.  Tests that edit or
+    damage it work on ``helpers.clone_built`` copies."""
+    repo = copy_repo(tmp_path_factory.mktemp("built"))
+    path = repo / "workflow/config.yaml"
+    config = yaml.safe_load(path.read_text())
+    config["scenes"] = {name: config["scenes"][name] for name in ("paper", "smoke")} | TEST_SCENES
+    config["figures_scene"] = "smoke"
+    path.write_text(yaml.safe_dump(config, sort_keys=False))
+    t0 = time.perf_counter()
+    snakemake(repo, "-c2", *BUILT_TARGETS)
+    print(f"built repository copy: {time.perf_counter() - t0:.1f} s")
+    return repo

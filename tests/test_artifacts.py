@@ -8,8 +8,8 @@ import os
 import numpy as np
 import pytest
 
-from signorini import artifacts
-from signorini.artifacts import (
+from signorini.pipeline import artifacts
+from signorini.pipeline.artifacts import (
     CorruptArtifactError,
     atomic_write_text,
     load_json,

@@ -10,8 +10,7 @@ import scipy.sparse as sp
 from skfem import BilinearForm, CellBasis, ElementTriP1, LinearForm
 from skfem.helpers import dot, grad
 
-from signorini import Problem
-from signorini.assembly import (
+from signorini.fem.assembly import (
     INTORDER,
     assemble,
     assemble_bilinear_form,
@@ -21,8 +20,9 @@ from signorini.assembly import (
     p1_basis,
     system_matrix,
 )
-from signorini.discrete import build, interpolate_fk
-from signorini.mesh import DIAGONALS, boundary_nodes, friedrichs_keller, mesh_width
+from signorini.fem.discrete import build, interpolate_fk
+from signorini.fem.mesh import DIAGONALS, boundary_nodes, friedrichs_keller, mesh_width
+from signorini.fem.problem import Problem
 
 SIZES = [1, 2, 3, 8]
 

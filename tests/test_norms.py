@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from numpy.polynomial.legendre import leggauss
 
-from signorini.mesh import friedrichs_keller
-from signorini.norms import (
+from signorini.fem.mesh import friedrichs_keller
+from signorini.fem.norms import (
     H12_FORMS,
     MAX_POINTS,
     QUADRATURES,
@@ -35,7 +35,7 @@ from signorini.norms import (
     w1inf_norm,
     w1p_norm,
 )
-from signorini.quadrature import dunavant8, gauss_legendre_01, stroud_conical
+from signorini.fem.quadrature import dunavant8, gauss_legendre_01, stroud_conical
 
 PAPER_NORMS = ["L4", "L16", "Linf", "W14", "W116", "W1inf", "H12"]
 
@@ -259,7 +259,7 @@ def test_interpolant_of_a_linear_function_has_zero_error(diagonal, quadrature):
 
 def test_manufactured_solution_interpolation_error_decreases():
     """u_h = nodal interpolant of the real u: every norm of the error shrinks under refinement."""
-    from signorini import Problem
+    from signorini.fem.problem import Problem
 
     problem = Problem()
     coarse = field(problem, N=10, u_h=lambda p: problem.u(p))
@@ -446,9 +446,9 @@ def test_p1_at_points_matches_scikit_fem_interpolation():
     """The written-out affine P1 evaluation agrees with scikit-fem's CellBasis."""
     from skfem import CellBasis, ElementTriP1
 
-    from signorini.mesh import friedrichs_keller
-    from signorini.norms import p1_at_points
-    from signorini.quadrature import dunavant8
+    from signorini.fem.mesh import friedrichs_keller
+    from signorini.fem.norms import p1_at_points
+    from signorini.fem.quadrature import dunavant8
 
     for diagonal in ("sw_ne", "nw_se"):
         mesh = friedrichs_keller(7, diagonal, jitter=0.2)
@@ -466,9 +466,10 @@ def test_p1_at_points_matches_scikit_fem_interpolation():
 @pytest.mark.parametrize("chunk", [1, 7, 50, 10**6])
 def test_chunked_evaluation_equals_whole_field(chunk):
     """evaluate_norms over chunks of triangles gives the single-pass values."""
-    from signorini import Problem
-    from signorini.discrete import build, solve_discrete
-    from signorini.norms import evaluate_norms
+    from signorini.fem.discrete import build
+    from signorini.fem.norms import evaluate_norms
+    from signorini.fem.problem import Problem
+    from signorini.fem.solve import solve_discrete
 
     problem = Problem()
     disc = build(problem, 9)

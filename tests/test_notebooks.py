@@ -1,8 +1,7 @@
 """The notebooks in notebooks/ run headless, without error, on the smoke scene.
 
-A temporary copy of the repository (Snakefile, workflow/, src/, notebooks/) gets the smoke
-scene built by Snakemake (``signorini.explore.build_scene``, the same call a notebook makes
-when no scene is built); the notebooks are then converted with jupytext and executed with
+A copy of the built repository (``conftest.built_repo``: the smoke scene and the small versions
+of the studies beyond the paper) gets the notebooks; they are converted with jupytext and executed with
 nbclient in a kernel running this interpreter (a kernelspec written to a temporary
 ``JUPYTER_PATH``, so nothing needs to be registered on the machine). ``SIGNORINI_ROOT`` and
 ``SIGNORINI_SCENE`` point them at the copy, so the developer's ``results/`` is never read.
@@ -22,6 +21,7 @@ from pathlib import Path
 import jupytext
 import numpy as np
 import pytest
+from helpers import clone_built
 from nbclient import NotebookClient
 
 from signorini import explore
@@ -49,7 +49,7 @@ def test_notebooks_are_present_and_paired():
 
 
 def test_expected_orders_match_table2_theory():
-    from signorini.tables import THEORETICAL_ORDERS
+    from signorini.paper import THEORETICAL_ORDERS
 
     assert explore.expected_orders(2) == (2.0, 1.0) and explore.expected_orders(4) == (2.0, 1.0)
     assert explore.expected_orders(16) == (THEORETICAL_ORDERS["L16"], THEORETICAL_ORDERS["W116"])
@@ -78,7 +78,7 @@ def test_locate_scene_prefers_paper_then_smoke(tmp_path, monkeypatch):
 
 
 def test_boundary_arclength_inverts_boundary_trace():
-    from signorini import Problem
+    from signorini.fem.problem import Problem
 
     trace = explore.boundary_trace(Problem(), n=50)
     np.testing.assert_allclose(explore.boundary_arclength(trace["x"]), trace["s"], atol=1e-12)
@@ -86,8 +86,8 @@ def test_boundary_arclength_inverts_boundary_trace():
 
 
 def test_active_set_history_matches_result():
-    from signorini import Problem
-    from signorini.discrete import build
+    from signorini.fem.discrete import build
+    from signorini.fem.problem import Problem
 
     result, history = explore.active_set_history(build(Problem(), 16), warm_start=None)
     assert list(history["iteration"]) == list(range(1, result.iterations + 1))
@@ -119,15 +119,12 @@ def test_display_artifacts(tmp_path):
 
 
 @pytest.fixture(scope="module")
-def notebook_env(tmp_path_factory):
-    """A repository copy with the smoke scene built, and a kernelspec for this interpreter."""
-    repo = tmp_path_factory.mktemp("nbrepo")
-    shutil.copy2(ROOT / "Snakefile", repo / "Snakefile")
-    ignore = shutil.ignore_patterns("__pycache__", "*.egg-info", "*.pyc", "*.ipynb", ".ipynb_checkpoints")
-    for name in ("workflow", "src", "notebooks"):
-        shutil.copytree(ROOT / name, repo / name, ignore=ignore)
-    seconds = explore.build_scene("smoke", root=repo)
-    print(f"smoke scene built with Snakemake in {seconds:.1f} s")
+def notebook_env(tmp_path_factory, built_repo):
+    """A copy of the built repository (the smoke scene and the small studies) with the notebooks,
+    and a kernelspec for this interpreter."""
+    repo = clone_built(built_repo, tmp_path_factory.mktemp("nbrepo"))
+    ignore = shutil.ignore_patterns("__pycache__", "*.ipynb", ".ipynb_checkpoints")
+    shutil.copytree(ROOT / "notebooks", repo / "notebooks", ignore=ignore)
 
     jupyter = tmp_path_factory.mktemp("jupyter")
     spec = jupyter / "kernels" / KERNEL

@@ -1,6 +1,6 @@
 """The manufactured solution of Section 7: ψ, u, ∇u, f and the Signorini conditions.
 
-Reference values are computed independently of ``signorini.problem``: ψ from the
+Reference values are computed independently of ``signorini.fem.problem``: ψ from the
 ten Hermite conditions (a 10×10 solve), u and ∇u from the paper's polar formula
 ``10 ψ(r) (−r^{3/2} sin(3θ/2))`` with ``θ = arccos((x₁ − x0)/r)``, and ``−Δu + c u``
 from finite differences of the implemented ``u``.
@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 from numpy.polynomial import Polynomial
 
-from signorini import Problem, ProblemParameterError
+from signorini.fem.problem import Problem, ProblemParameterError
 
 PROBLEMS = [Problem(), Problem(x0=0.47, c=3.0), Problem(x0=0.4, R=0.3, A=2.0, c=0.0), Problem(x0=0.62, R=0.35)]
 PROBLEM_IDS = ["default", "x0=0.47,c=3", "x0=0.4,R=0.3,A=2,c=0", "x0=0.62,R=0.35"]

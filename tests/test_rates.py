@@ -10,11 +10,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from signorini import Problem
-from signorini.convergence import eoc, regression_slope
-from signorini.discrete import build, solve_discrete
-from signorini.mesh import mesh_width
-from signorini.norms import compute_norms, error_field
+from signorini.fem.convergence import eoc, regression_slope
+from signorini.fem.discrete import build
+from signorini.fem.mesh import mesh_width
+from signorini.fem.norms import compute_norms, error_field
+from signorini.fem.problem import Problem
+from signorini.fem.solve import solve_discrete
 
 SEQUENCE = (21, 41, 81)
 NORMS = ["L4", "W14", "W1inf", "H12"]

@@ -11,9 +11,10 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from signorini import Problem
-from signorini.discrete import build, solve_discrete
-from signorini.mesh import boundary_nodes, friedrichs_keller
+from signorini.fem.discrete import build
+from signorini.fem.mesh import boundary_nodes, friedrichs_keller
+from signorini.fem.problem import Problem
+from signorini.fem.solve import solve_discrete
 from signorini.solvers import (
     SOLVERS,
     BadInputError,
@@ -468,7 +469,7 @@ def test_an_older_in_place_factor_refuses_to_solve(cache):
 def test_zero_data_semicoercive_problem_gives_zero():
     """f ≡ 0, c = 0: A = K is singular and every u = t ≥ 0 solves the QP. The active-set
     method keeps the degenerate (u = λ = 0) boundary in contact and returns u = 0, certified."""
-    from signorini.assembly import p1_basis, system_matrix
+    from signorini.fem.assembly import p1_basis, system_matrix
 
     mesh = friedrichs_keller(12)
     K = system_matrix(p1_basis(mesh, intorder=2), 0.0)
@@ -479,7 +480,7 @@ def test_zero_data_semicoercive_problem_gives_zero():
 def test_unbounded_semicoercive_problem_raises_a_named_error():
     """c = 0 with a load pushing the whole boundary inwards (b > 0): u = t·1 drives the energy
     to −∞, no minimiser exists; a named error, never a raw LinAlgError or a "certified" u."""
-    from signorini.assembly import p1_basis, system_matrix
+    from signorini.fem.assembly import p1_basis, system_matrix
 
     mesh = friedrichs_keller(12)
     basis = p1_basis(mesh, intorder=2)

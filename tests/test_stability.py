@@ -7,8 +7,6 @@ from __future__ import annotations
 import csv
 import json
 import os
-import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -17,13 +15,21 @@ import pytest
 import scipy.sparse as sp
 import yaml
 
-from signorini import Problem, ProblemParameterError, pipeline, stability
-from signorini.discrete import build, solve_discrete
-from signorini.norms import evaluate_norms
-from signorini.problem import ConstantProblem, FullContactProblem, make_problem
+from signorini.fem.discrete import build
+from signorini.fem.norms import evaluate_norms
+from signorini.fem.problem import (
+    ConstantProblem,
+    FullContactProblem,
+    Problem,
+    ProblemParameterError,
+    make_problem,
+)
+from signorini.fem.solve import solve_discrete
 from signorini.solvers import BadInputError, NotConvergedError, active_set_solve, cvxpy_solve, kkt_certificate
 from signorini.solvers.certificate import Certificate
 from signorini.solvers.linalg import is_positive_definite
+from signorini.studies.stability import atlas as stab_atlas
+from signorini.studies.stability import cases as stab_cases
 
 ROOT = Path(__file__).resolve().parents[1]
 AMPLITUDES = [1e-12, 1e-6, 1.0, 1e6, 1e12]
@@ -89,7 +95,7 @@ def test_exact_solver_on_extreme_reaction(c):
     disc = build(Problem(c=c), 11)
     res = solve_discrete(disc)
     assert res.certificate.ok and np.all(np.isfinite(res.u))
-    cond = stability.condition_estimates(disc, res.active)
+    cond = stab_cases.condition_estimates(disc, res.active)
     if c <= 1e-8:
         assert cond["cond_A"] > 1e8 and cond["cond_free"] < 1e4
     else:
@@ -98,7 +104,7 @@ def test_exact_solver_on_extreme_reaction(c):
 
 def test_extreme_eigenvalues_agree_with_dense():
     A = build(Problem(c=1e-4), 15).A  # 256 unknowns: the ARPACK branch
-    lmin, lmax = stability.extreme_eigenvalues(A)
+    lmin, lmax = stab_cases.extreme_eigenvalues(A)
     w = np.linalg.eigvalsh(A.toarray())
     assert lmax == pytest.approx(w[-1], rel=1e-6)
     assert lmin == pytest.approx(w[0], rel=1e-4)
@@ -132,8 +138,8 @@ def test_even_and_odd_N(N):
 def test_jittered_mesh_warm_start_gives_the_cold_solution():
     """solve_discrete's cascade (coarse unjittered mesh, interpolated at the jittered nodes)
     stays a valid warm start: same solution as a cold start, fewer iterations."""
-    case = stability.Case("j", "mesh", Problem().as_dict(), 101, jitter=0.2, seed=1)
-    disc = stability.build_case(case)
+    case = stab_atlas.Case("j", "mesh", Problem().as_dict(), 101, jitter=0.2, seed=1)
+    disc = stab_cases.build_case(case)
     assert not np.allclose(disc.mesh.p, build(Problem(), 101).mesh.p)
     warm, cold = solve_discrete(disc), solve_discrete(disc, warm_start=None)
     assert warm.certificate.ok and cold.certificate.ok
@@ -243,8 +249,8 @@ EXPECTED_ERRORS = {
 
 @pytest.mark.parametrize("corrupt", sorted(EXPECTED_ERRORS))
 def test_bad_input_raises_a_clear_error(corrupt):
-    case = stability.Case("bad", "bad_input", Problem().as_dict(), 11, corrupt=corrupt)
-    disc = stability.build_case(case)
+    case = stab_atlas.Case("bad", "bad_input", Problem().as_dict(), 11, corrupt=corrupt)
+    disc = stab_cases.build_case(case)
     error, text = EXPECTED_ERRORS[corrupt]
     t0 = time.perf_counter()
     with pytest.raises(error, match=text):
@@ -255,15 +261,15 @@ def test_bad_input_raises_a_clear_error(corrupt):
 
 
 def test_nan_parameter_is_rejected_when_building():
-    case = stability.Case("bad", "bad_input", Problem().as_dict(), 11, corrupt="nan_parameter")
+    case = stab_atlas.Case("bad", "bad_input", Problem().as_dict(), 11, corrupt="nan_parameter")
     with pytest.raises(ProblemParameterError, match="finite"):
-        stability.build_case(case)
+        stab_cases.build_case(case)
 
 
 def test_indefinite_matrix_that_the_active_set_would_accept_is_rejected():
     """A = K − M: every clamped block is definite, so before the PSD check the active-set method
     returned a "certified" KKT point of an unbounded QP (the constant direction lowers the energy)."""
-    disc = stability.build_case(stability.Case("bad", "bad_input", Problem().as_dict(), 21, corrupt="non_spd"))
+    disc = stab_cases.build_case(stab_atlas.Case("bad", "bad_input", Problem().as_dict(), 21, corrupt="non_spd"))
     ones = np.ones(disc.b.size)
     assert ones @ (disc.A @ ones) < 0  # a feasible direction of negative curvature
     with pytest.raises(BadInputError):
@@ -276,8 +282,8 @@ def test_positive_definiteness_test(backend):
 
     if backend not in available_backends():
         pytest.skip(f"{backend} not installed")
-    mesh = stability.build_case(stability.Case("j", "mesh", Problem().as_dict(), 21, jitter=0.2)).mesh
-    from signorini.assembly import p1_basis, system_matrix
+    mesh = stab_cases.build_case(stab_atlas.Case("j", "mesh", Problem().as_dict(), 21, jitter=0.2)).mesh
+    from signorini.fem.assembly import p1_basis, system_matrix
 
     basis = p1_basis(mesh, intorder=2)
     K = system_matrix(basis, 0.0)
@@ -289,7 +295,7 @@ def test_positive_definiteness_test(backend):
 
 def test_semicoercive_matrix_passes_the_psd_check():
     """c = 0 (A = K singular, still convex) is a valid Signorini QP, also on a jittered mesh."""
-    disc = stability.build_case(stability.Case("j", "mesh", Problem(c=0.0).as_dict(), 21, jitter=0.2))
+    disc = stab_cases.build_case(stab_atlas.Case("j", "mesh", Problem(c=0.0).as_dict(), 21, jitter=0.2))
     res = solve_discrete(disc)
     assert res.certificate.ok
 
@@ -306,36 +312,36 @@ def test_certificate_never_certifies_nan():
 
 
 def test_run_isolated_reports_every_outcome():
-    assert stability.run_isolated(lambda: 41 + 1, 30) == ("ok", 42)
-    outcome, reason = stability.run_isolated(lambda: 1 / 0, 30)
+    assert stab_cases.run_isolated(lambda: 41 + 1, 30) == ("ok", 42)
+    outcome, reason = stab_cases.run_isolated(lambda: 1 / 0, 30)
     assert outcome == "error" and reason.startswith("ZeroDivisionError")
     t0 = time.perf_counter()
-    outcome, reason = stability.run_isolated(lambda: time.sleep(60), 1.0)
+    outcome, reason = stab_cases.run_isolated(lambda: time.sleep(60), 1.0)
     assert outcome == "timeout" and time.perf_counter() - t0 < 10
-    outcome, reason = stability.run_isolated(lambda: os._exit(3), 30)
+    outcome, reason = stab_cases.run_isolated(lambda: os._exit(3), 30)
     assert outcome == "crash" and "3" in reason
 
 
 def test_run_case_classifies_and_never_raises():
     scene = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())["scenes"]["stability"]
-    atlas = stability.parse_atlas(scene)
-    atlas = stability.Atlas(
+    atlas = stab_atlas.parse_atlas(scene)
+    atlas = stab_atlas.Atlas(
         (
-            stability.Case("ok", "scaling", Problem().as_dict(), 6, solvers=("active_set", "osqp")),
-            stability.Case("bad", "bad_input", Problem().as_dict(), 6, corrupt="nan_parameter", solvers=("osqp",)),
+            stab_atlas.Case("ok", "scaling", Problem().as_dict(), 6, solvers=("active_set", "osqp")),
+            stab_atlas.Case("bad", "bad_input", Problem().as_dict(), 6, corrupt="nan_parameter", solvers=("osqp",)),
         ),
         atlas.solvers,
         ("L4", "H12"),
         timeout_s=60,
     )
-    info, arrays = stability.run_case(atlas, atlas.cases[0])
+    info, arrays = stab_cases.run_case(atlas, atlas.cases[0])
     rows = {r["solver"]: r for r in info["rows"]}
     assert rows["active_set"]["status"] == "ok" and rows["active_set"]["as_expected"]
     assert rows["active_set"]["kkt_worst"] <= 1e-10 and not rows["active_set"]["nan_inf"]
     assert rows["osqp"]["diff_to_active_set"] <= 1e-6
     assert set(arrays) == {"u_active_set", "active_active_set", "u_osqp", "active_osqp"}
     assert info["cond"]["cond_A"] > 1
-    info, arrays = stability.run_case(atlas, atlas.cases[1])
+    info, arrays = stab_cases.run_case(atlas, atlas.cases[1])
     (row,) = info["rows"]
     assert row["status"] == "failed" and row["as_expected"] and row["reason"].startswith("ProblemParameterError")
     assert arrays == {}
@@ -348,15 +354,15 @@ def test_run_case_classifies_and_never_raises():
 
 def test_shipped_atlas_parses_and_every_case_builds():
     config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
-    atlas = stability.scene_atlas(config, "stability")
-    assert {c.group for c in atlas.cases} == set(stability.GROUPS)
+    atlas = stab_atlas.scene_atlas(config, "stability")
+    assert {c.group for c in atlas.cases} == set(stab_atlas.GROUPS)
     for case in atlas.cases:
         if case.N <= 201 and case.corrupt != "nan_parameter":
-            disc = stability.build_case(case)
+            disc = stab_cases.build_case(case)
             assert disc.b.size == (case.N + 1) ** 2
         job = atlas.job(case.name)
         json.dumps(job)
-        assert stability.Atlas.from_job(job).cases[0] == case
+        assert stab_atlas.Atlas.from_job(job).cases[0] == case
 
 
 @pytest.mark.parametrize(
@@ -381,93 +387,24 @@ def test_atlas_config_errors_name_the_field(change, field):
         "atlas": {"solvers": {"active_set": {"solver": "active_set"}}, "cases": [{"name": "a", "group": "mesh"}]},
     }
     scene["atlas"]["cases"][0].update(change)
-    with pytest.raises(stability.AtlasConfigError, match=field.replace("[", r"\[").replace("]", r"\]")):
-        stability.parse_atlas(scene)
-
-
-def test_stage_modules_cover_what_the_atlas_stages_import(tmp_path):
-    """Run both stages in a fresh interpreter; the signorini modules they import are declared."""
-    job = {
-        "case": stability.Case("t", "mesh", Problem().as_dict(), 4, solvers=("active_set", "osqp")).as_dict(),
-        "solvers": {
-            "active_set": {"label": "active_set", "solver": "active_set", "options": {}, "kkt_tol": 1e-10},
-            "osqp": {"label": "osqp", "solver": "cvxpy_osqp", "options": {"normalize": True}, "kkt_tol": 1e-6},
-        },
-        "norms": ["L4"],
-        "timeout_s": 60,
-        "cond_max_dofs": 100,
-    }
-    script = f"""
-import json, sys
-from signorini import stability
-d, job = {str(tmp_path)!r}, json.loads(sys.argv[2])
-if sys.argv[1] == "stability_case":
-    stability.case_stage(job, d + "/t.json", d + "/t.npz")
-else:
-    out = [d + "/s." + ext for ext in ("csv", "md", "pdf", "png")]
-    from signorini.stability_report import atlas_stage
-    atlas_stage(["L4"], ["active_set", "osqp"], [d + "/t.json"], [d + "/t.npz"], *out)
-print(json.dumps(sorted(m for m in sys.modules if m == "signorini" or m.startswith("signorini."))))
-"""
-    for stage in ("stability_case", "stability_atlas"):
-        out = subprocess.run(
-            [sys.executable, "-c", script, stage, json.dumps(job)], capture_output=True, text=True, check=True
-        )
-        imported = set(json.loads(out.stdout.strip().splitlines()[-1]))
-        declared = {
-            ("signorini." + rel.removesuffix(".py").replace("/", ".")).removesuffix(".__init__")
-            for rel in pipeline.STAGE_MODULES[stage]
-        }
-        assert imported <= declared, f"{stage}: runs undeclared modules {sorted(imported - declared)}"
+    with pytest.raises(stab_atlas.AtlasConfigError, match=field.replace("[", r"\[").replace("]", r"\]")):
+        stab_atlas.parse_atlas(scene)
 
 
 # ---------------------------------------------------------------------------------
 # the scene end to end
 # ---------------------------------------------------------------------------------
 
-SMOKE = {
-    "scenes": {
-        "stability": {
-            "atlas": {
-                "timeout_s": 60,
-                "default_solvers": ["active_set", "osqp", "osqp_raw"],
-                "cases": [
-                    {"name": "A_1e-9", "group": "scaling", "N": 9, "problem": {"A": 1e-9}, "reference": "A_1"},
-                    {"name": "A_1", "group": "scaling", "N": 9, "problem": {"A": 1.0}},
-                    {"name": "c_1e-06", "group": "reaction", "N": 9, "problem": {"c": 1e-6}},
-                    {"name": "c_1e+06", "group": "reaction", "N": 9, "problem": {"c": 1e6}},
-                    {"name": "N2", "group": "mesh", "N": 2, "solvers": ["active_set", "osqp"]},
-                    {"name": "jitter", "group": "mesh", "N": 9, "jitter": 0.2, "solvers": ["active_set"]},
-                    {"name": "f_zero", "group": "degenerate", "N": 9, "problem": {"A": 0.0}},
-                    {"name": "bad_spd", "group": "bad_input", "N": 9, "corrupt": "non_spd", "solvers": ["active_set"]},
-                ],
-            }
-        }
-    }
-}
+def test_small_atlas_end_to_end(built_repo):
+    from conftest import TEST_SCENES
+    from helpers import snakemake
 
-
-@pytest.fixture(scope="module")
-def smoke_atlas(tmp_path_factory):
-    from test_pipeline import copy_repo, snakemake
-
-    repo = copy_repo(tmp_path_factory.mktemp("stability"))
-    (repo / "smoke.yaml").write_text(yaml.safe_dump(SMOKE))
-    t0 = time.perf_counter()
-    snakemake(repo, "-c2", "stability", "--configfile", "smoke.yaml")
-    print(f"stability smoke scene: {time.perf_counter() - t0:.1f} s")
-    return repo
-
-
-def test_smoke_scene_end_to_end(smoke_atlas):
-    from test_pipeline import snakemake
-
-    out = smoke_atlas / "paper_figures"
+    out = built_repo / "paper_figures"
     rows = list(csv.DictReader((out / "stability.csv").open()))
-    cases = SMOKE["scenes"]["stability"]["atlas"]["cases"]
+    cases = TEST_SCENES["stability"]["atlas"]["cases"]
     expected = sum(len(c.get("solvers", ["active_set", "osqp", "osqp_raw"])) for c in cases)
     assert len(rows) == expected
-    assert {r["status"] for r in rows} <= set(stability.STATUSES)
+    assert {r["status"] for r in rows} <= set(stab_atlas.STATUSES)
     assert not any(r["nan_inf"] == "True" for r in rows)
     exact = {r["case"]: r for r in rows if r["solver"] == "active_set"}
     assert all(r["as_expected"] == "True" for r in exact.values())
@@ -482,7 +419,7 @@ def test_smoke_scene_end_to_end(smoke_atlas):
     for ext in ("pdf", "png"):
         assert (out / f"stability.{ext}").stat().st_size > 10_000
     # a rerun is a no-op; the scene is not part of `all`
-    proc = snakemake(smoke_atlas, "-n", "stability", "--configfile", "smoke.yaml")
+    proc = snakemake(built_repo, "-n", "stability")
     assert "Nothing to be done" in proc.stdout + proc.stderr
-    proc = snakemake(smoke_atlas, "-n", "all", "--configfile", "smoke.yaml")
+    proc = snakemake(built_repo, "-n", "--forceall", "all")
     assert "stability_case" not in proc.stdout + proc.stderr

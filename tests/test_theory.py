@@ -1,23 +1,23 @@
-"""Issue 7: Ritz projection / supercloseness, discrete H^{1/2}(∂Ω) norm, contact set, expected
-rates, and the `theory` target run end to end on a small version of the scene."""
+"""The theory scene: Ritz projection / supercloseness, discrete H^{1/2}(∂Ω) norm, contact set,
+expected rates, and the `theory` target end to end on a small version of the scene."""
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
 import pytest
-import yaml
 from skfem import LinearForm
 
-from signorini import Problem
-from signorini.assembly import p1_basis, system_matrix
-from signorini.discrete import build, solve_discrete
-from signorini.mesh import friedrichs_keller
+from signorini.fem.assembly import p1_basis, system_matrix
+from signorini.fem.discrete import build
+from signorini.fem.mesh import friedrichs_keller
+from signorini.fem.problem import Problem
+from signorini.fem.solve import solve_discrete
+from signorini.paper import expected_rate
 from signorini.solvers.linalg import factorize
-from signorini.theory import (
+from signorini.studies.theory.quantities import (
     boundary_h12_norm,
     contact_set,
-    expected_rate,
     h1_norm_p1,
     ritz_projection,
     ritz_rhs,
@@ -127,33 +127,22 @@ def test_expected_rates():
     assert expected_rate("L16") == pytest.approx(1.625)
     assert expected_rate("Linf") == 1.5 and expected_rate("W1inf") == 0.5
     assert expected_rate("W116") == pytest.approx(0.625)
-    assert expected_rate("H12") is None
+    assert expected_rate("H12") == 1.5 and expected_rate("H1") == 1.0  # Table 2's theo. row; W^{1,2}
+    assert expected_rate("L4plus") == 2.0 and expected_rate("L2boundary") is None
 
 
-def test_theory_target_end_to_end(tmp_path):
-    from test_pipeline import copy_repo, snakemake
-
-    repo = copy_repo(tmp_path)
-    small = {
-        "scenes": {
-            "theory": {
-                "N": [9, 17, 33],
-                "norms": ["L2", "L4", "L8", "Linf", "W12", "W14", "W1inf", "H1", "H12", "L4plus", "L4minus"],
-            }
-        }
-    }
-    (repo / "small.yaml").write_text(yaml.safe_dump(small))
-    snakemake(repo, "-c2", "theory", "--configfile", "small.yaml")
-    md = (repo / "paper_figures/theory.md").read_text()
+def test_theory_target_end_to_end(built_repo):
+    md = (built_repo / "paper_figures/theory.md").read_text()
     assert "Supercloseness" in md and "| L4 |" in md
     for name in ("theory_rates.png", "theory_extra.png", "theory.csv"):
-        assert (repo / "paper_figures" / name).stat().st_size > 0
+        assert (built_repo / "paper_figures" / name).stat().st_size > 0
 
 
 def test_table2_rows_give_the_eoc_of_each_mesh_pair():
     """``table2_rows``: e = C h^r gives EOC r on every consecutive pair, in the paper's norms
     present, meshes sorted by N; the findings render them with the expected orders."""
-    from signorini.theory_report import TABLE2_NORMS, table2_rows
+    from signorini.paper import TABLE2_NORMS
+    from signorini.studies.theory.report import table2_rows
 
     N = np.array([1001, 101, 201, 2001])
     h = 1.0 / N

@@ -1,32 +1,32 @@
 """The work-precision study: norms of a P1 function, the measurement function (statuses,
-algebraic error of the exact solver), the stage modules, and a smoke scene end to end."""
+algebraic error of the exact solver), the findings, and the small study end to end."""
 
 from __future__ import annotations
 
-import json
 import math
-import subprocess
-import sys
-import time
 
 import numpy as np
 import pandas as pd
 import pytest
-import yaml
+from helpers import PROBLEM, snakemake
 from skfem import MeshTri
-from test_pipeline import ROOT, copy_repo, snakemake
 
-from signorini import pipeline
-from signorini import work_precision as wp
-from signorini import work_precision_report as wpr
-from signorini.mesh import friedrichs_keller
-from signorini.norms import Conventions, evaluate_norms
-from signorini.problem import Problem
-from signorini.quadrature import stroud_conical
+from signorini.fem import p1norms
+from signorini.fem.mesh import friedrichs_keller
+from signorini.fem.norms import Conventions, evaluate_norms
+from signorini.fem.problem import Problem
+from signorini.fem.quadrature import stroud_conical
+from signorini.paper import PAPER_NORMS
 from signorini.solvers import Certificate, NotConvergedError, SolveResult
+from signorini.studies.scene.discretise import discretise_stage
+from signorini.studies.scene.norm import norm_stage
+from signorini.studies.scene.solve import solve_stage
+from signorini.studies.scene.store import load_system
+from signorini.studies.work_precision import findings as wpf
+from signorini.studies.work_precision import measure as wp
+from signorini.studies.work_precision.study import study_configs
 
-PROBLEM = {"x0": 0.5, "R": 0.45, "A": 10, "c": 1}
-NORMS = list(wp.STUDY_NORMS)
+NORMS = list(PAPER_NORMS)
 
 
 # --- norms of a P1 function -----------------------------------------------------------------
@@ -36,7 +36,7 @@ def test_complete_homogeneous_polynomial(rng):
     x, y, z = rng.standard_normal((3, 7))
     for p in (0, 1, 2, 4, 16):
         brute = sum(x**a * y**b * z ** (p - a - b) for a in range(p + 1) for b in range(p + 1 - a))
-        np.testing.assert_allclose(wp._complete_homogeneous(x, y, z, p), brute, rtol=1e-12)
+        np.testing.assert_allclose(p1norms._complete_homogeneous(x, y, z, p), brute, rtol=1e-12)
 
 
 @pytest.mark.parametrize("form", ["components", "gradient", "seminorm"])
@@ -47,7 +47,7 @@ def test_p1_norms_match_the_quadrature_norms(rng, form):
     v = rng.standard_normal(mesh.p.shape[1])
     conv = Conventions(w1p_form=form)
     names = ["L2", "L4", "Linf", "W14", "W1inf", "H1", "H12", "L2boundary"]
-    ours = wp.p1_norms(mesh, v, names, conv)
+    ours = p1norms.p1_norms(mesh, v, names, conv)
     ref = evaluate_norms(Problem(A=0.0), mesh, v, names, conv)
     for name in names:
         assert ours[name] == pytest.approx(ref[name], rel=1e-12), name
@@ -62,15 +62,15 @@ def test_p1_norms_high_powers_are_exact(rng):
     area = 0.5 * abs(0.7 * 0.9 - 0.1 * 0.2)
     for p in (4, 16):
         ref = (area * np.sum(np.abs(values) ** p * weights)) ** (1 / p)
-        assert wp.p1_norms(tri, w, [f"L{p}"])[f"L{p}"] == pytest.approx(ref, rel=1e-12)
-    assert wp.p1_norms(tri, 1e-150 * w, ["L16"])["L16"] == pytest.approx(1e-150 * ref, rel=1e-12)  # no underflow
+        assert p1norms.p1_norms(tri, w, [f"L{p}"])[f"L{p}"] == pytest.approx(ref, rel=1e-12)
+    assert p1norms.p1_norms(tri, 1e-150 * w, ["L16"])["L16"] == pytest.approx(1e-150 * ref, rel=1e-12)  # no underflow
 
 
 def test_p1_norms_of_zero_and_unsupported_names():
     mesh = friedrichs_keller(4)
-    assert wp.p1_norms(mesh, np.zeros(25), NORMS) == dict.fromkeys(NORMS, 0.0)
+    assert p1norms.p1_norms(mesh, np.zeros(25), NORMS) == dict.fromkeys(NORMS, 0.0)
     with pytest.raises(ValueError, match="not supported"):
-        wp.p1_norms(mesh, np.ones(25), ["L4plus"])
+        p1norms.p1_norms(mesh, np.ones(25), ["L4plus"])
 
 
 # --- configurations, skips and failure classification -----------------------------------------
@@ -78,7 +78,7 @@ def test_p1_norms_of_zero_and_unsupported_names():
 
 def test_study_configs_add_installed_solvers():
     study = {"configs": {"osqp": {"solver": "osqp", "label": "OSQP (polish)"}}, "qp_solvers": "installed"}
-    configs = wp.study_configs(study, installed=["CLARABEL", "OSQP"])
+    configs = study_configs(study, installed=["CLARABEL", "OSQP"])
     assert list(configs) == ["osqp", "clarabel"]
     assert configs["osqp"].solver == "OSQP" and configs["osqp"].label == "OSQP (polish)"
     assert configs["clarabel"].solver == "CLARABEL" and not configs["clarabel"].exact
@@ -119,31 +119,26 @@ def small_study(tmp_path_factory):
     workflow provides them to a measurement job."""
     d = tmp_path_factory.mktemp("wp")
     N = 12
-    wp.system_stage(PROBLEM, N, "sw_ne", d / "system.npz", d / "system.json")
-    pipeline.solve_stage(PROBLEM, N, "active_set", d / "solution.npz", d / "solution.json")
+    discretise_stage(PROBLEM, N, "sw_ne", d / "system.npz", d / "system.json")
+    solve_stage(PROBLEM, N, "sw_ne", d / "system.npz", "active_set", d / "solution.npz", d / "solution.json")
     disc = {}
     for n in NORMS:
-        pipeline.norm_stage(PROBLEM, N, d / "solution.npz", n, d / f"{n}.json")
+        norm_stage(PROBLEM, N, "sw_ne", d / "solution.npz", n, d / f"{n}.json")
         disc[n] = d / f"{n}.json"
     return {"dir": d, "N": N, "disc": disc}
 
 
-def measure(small_study, config: dict, tolerances=(1e-2,), out="out.json", **kwargs) -> list[dict]:
+def measure(small_study, config: dict, tolerances=(1e-2,), out="out.json", prev_json=None) -> list[dict]:
     d = small_study["dir"]
     spec = {"name": "x", "label": "x", "options": {}, **config}
-    info = wp.measure_stage(
-        PROBLEM,
-        small_study["N"],
-        spec,
-        tolerances,
-        30.0,
-        d / "system.npz",
-        d / "system.json",
-        d / "solution.npz",
-        small_study["disc"],
-        d / out,
-        **kwargs,
-    )
+    inputs = {
+        "system": d / "system.npz",
+        "system_json": d / "system.json",
+        "exact": d / "solution.npz",
+        "disc": small_study["disc"],
+        "prev": prev_json,
+    }
+    info = wp.measure_stage(PROBLEM, small_study["N"], "sw_ne", spec, tolerances, 30.0, inputs, d / out)
     return info["records"]
 
 
@@ -180,7 +175,7 @@ def test_failing_solver_is_recorded_not_raised(small_study, monkeypatch):
     assert np.isfinite(recs[0]["time_s"]) and recs[0]["disc_L4"] > 0
 
     # an answer whose KKT residual exceeds the requested tolerance is measured and marked
-    exact = wp.load_system(small_study["dir"] / "system.npz")[1] * 0.0
+    exact = load_system(small_study["dir"] / "system.npz")[1] * 0.0
 
     def sloppy(A, b, B, solver, tol=None, **kwargs):
         cert = Certificate(1e-1, 0.0, 0.0, 0.0, 1e-6)
@@ -248,7 +243,7 @@ def test_findings_on_a_synthetic_table():
                 }
             )
     df = pd.DataFrame(rows)
-    found = wpr.findings(df, ["L4", "W14"], paper_l4={10: 1e-3}, paper_l4_eoc={20: 2.0, 40: 2.1})
+    found = wpf.findings(df, ["L4", "W14"], paper_l4={10: 1e-3}, paper_l4_eoc={20: 2.0, 40: 2.1})
     assert found["needed"] == {"qp": "1e-06"}
     cells = {(c["config"], c["tol_label"]): c for c in found["cells"]}
     assert cells[("qp", "1e-02")]["changed"] == 3 and cells[("qp", "1e-06")]["changed"] == 0
@@ -261,89 +256,14 @@ def test_findings_on_a_synthetic_table():
     }
 
 
-# --- stage modules --------------------------------------------------------------------------
+# --- the study end to end -------------------------------------------------------------------
 
 
-def test_stage_modules_cover_what_the_study_stages_import(small_study, tmp_path):
-    d = small_study["dir"]
-    disc = {n: str(p) for n, p in small_study["disc"].items()}
-    script = f"""
-import json, sys
-from signorini import work_precision as wp
-stage, d, t = sys.argv[1], {str(d)!r}, {str(tmp_path)!r}
-P = {PROBLEM!r}
-if stage == "work_precision_system":
-    wp.system_stage(P, 6, "sw_ne", t + "/s.npz", t + "/s.json")
-elif stage == "work_precision_measure":
-    cfg = {{"name": "osqp", "solver": "OSQP", "label": "OSQP", "options": {{}}}}
-    wp.measure_stage(P, 12, cfg, [1e-2], 10.0, d + "/system.npz", d + "/system.json", d + "/solution.npz",
-                     {disc!r}, t + "/m.json")
-    cfg = {{"name": "as", "solver": "active_set", "label": "AS", "options": {{}}}}
-    wp.measure_stage(P, 12, cfg, [], None, d + "/system.npz", d + "/system.json", d + "/solution.npz",
-                     {disc!r}, t + "/a.json")
-else:
-    wp.measure_stage(P, 12, {{"name": "as", "solver": "active_set", "label": "AS", "options": {{}}}}, [], None,
-                     d + "/system.npz", d + "/system.json", d + "/solution.npz", {disc!r}, t + "/a.json")
-    for m in list(sys.modules):
-        if m.startswith("signorini") and m not in ("signorini", "signorini.work_precision", "signorini.artifacts"):
-            del sys.modules[m]
-    if stage == "work_precision_table":
-        wp.collect_stage([t + "/a.json"], t + "/wp.csv")
-    elif stage == "work_precision_figures":
-        wp.collect_stage([t + "/a.json"], t + "/wp.csv")
-        from signorini import figures
-        df = wp.read_measurements(t + "/wp.csv")
-        figures.work_precision_figure(df, [12], t + "/f.pdf", t + "/f.png")
-        figures.cost_of_accuracy(df, t + "/c.pdf", t + "/c.png")
-    elif stage == "work_precision_report":
-        wp.collect_stage([t + "/a.json"], t + "/wp.csv")
-        ref = {str(ROOT / "workflow/reference")!r}
-        from signorini.work_precision_report import report_stage
-        report_stage(t + "/wp.csv", ref + "/paper_table1.csv", ref + "/paper_table2.csv", t + "/wp.md")
-mods = sorted(m for m in sys.modules if m == "signorini" or m.startswith("signorini."))
-print(json.dumps(mods))
-"""
-    for stage in [s for s in pipeline.STAGE_MODULES if s.startswith("work_precision")]:
-        out = subprocess.run([sys.executable, "-c", script, stage], capture_output=True, text=True)
-        assert out.returncode == 0, out.stderr[-3000:]
-        imported = set(json.loads(out.stdout.strip().splitlines()[-1]))
-        declared = {
-            ("signorini." + rel.removesuffix(".py").replace("/", ".")).removesuffix(".__init__")
-            for rel in pipeline.STAGE_MODULES[stage]
-        }
-        assert imported <= declared, f"{stage}: runs undeclared modules {sorted(imported - declared)}"
-
-
-# --- the scene end to end -------------------------------------------------------------------
-
-
-def test_smoke_study_end_to_end(tmp_path):
-    """A tiny study (N = 11, 21 of the smoke scene; active set and OSQP at two tolerances)
-    through `snakemake work_precision` in a repository copy: the paper_figures outputs, the
-    source scene's solutions reused (not recomputed), a no-op rerun."""
-    repo = copy_repo(tmp_path)
-    config_path = repo / "workflow/config.yaml"
-    config = yaml.safe_load(config_path.read_text())
-    config["scenes"]["work_precision"] = {
-        "N": [11, 21],
-        "norms": ["L4", "W14"],
-        "solver": "active_set",
-        "problem": PROBLEM,
-        "study": {
-            "source": "smoke",
-            "tolerances": [1e-2, 1e-8],
-            "time_limit_s": 30,
-            "figure_N": [11, 21],
-            "configs": {"active_set": {"solver": "active_set", "label": "active set"}},
-            "qp_solvers": ["OSQP"],
-        },
-    }
-    config_path.write_text(yaml.safe_dump(config, sort_keys=False))
-    t0 = time.perf_counter()
-    snakemake(repo, "-c2", "work_precision")
-    elapsed = time.perf_counter() - t0
-    print(f"smoke work-precision scene: {elapsed:.1f} s")
-    out = repo / "paper_figures"
+def test_small_study_end_to_end(built_repo):
+    """The small study of the built copy (N = 11, 21 of the smoke scene; active set and OSQP at two
+    tolerances): the paper_figures outputs, the source scene's systems and solutions reused (not
+    recomputed), a no-op rerun."""
+    out = built_repo / "paper_figures"
     for name in ("work_precision.pdf", "work_precision.png", "cost_of_accuracy.pdf", "cost_of_accuracy.png"):
         assert (out / name).stat().st_size > 1000, name
     df = pd.read_csv(out / "work_precision.csv")
@@ -355,9 +275,10 @@ def test_smoke_study_end_to_end(tmp_path):
     assert {c.split("_", 1)[1] for c in df.columns if c.startswith("alg_")} == {"L4", "W14"}
     md = (out / "work_precision.md").read_text()
     assert "## Which tolerance keeps Table 1" in md and "Machine load" in md
-    # reused: the smoke scene's solutions, none of the study scene's own
-    assert (repo / "results/smoke/N21/solution.npz").exists()
-    assert not list((repo / "results/work_precision").glob("N*/solution.npz"))
-    noop = snakemake(repo, "-n", "work_precision")
+    # reused: the smoke scene's systems and solutions, none of the study scene's own
+    assert (built_repo / "results/smoke/N21/solution.npz").exists()
+    assert not list((built_repo / "results/work_precision").glob("N*/s*.npz"))
+    assert (df["build_s"] > 0).all()  # the assembly time of the smoke scene's discretise job
+    noop = snakemake(built_repo, "-n", "work_precision")
     assert "Nothing to be done" in noop.stdout + noop.stderr
     assert math.isfinite(df["time_s"].min())

@@ -29,15 +29,18 @@ from pathlib import Path
 
 import numpy as np
 
-from signorini.artifacts import load_json, load_npz
-from signorini.pipeline import PATHS, artifact_ok, read_errors_csv
-from signorini.problem import Problem
+from signorini.fem.mesh import DEFAULT_DIAGONAL
+from signorini.fem.problem import Problem
+from signorini.pipeline.artifacts import load_json, load_npz
+from signorini.pipeline.cache import artifact_ok
+from signorini.pipeline.paths import PATHS, REFERENCES
+from signorini.studies.paper.sample import GRID
+from signorini.studies.scene.store import read_errors_csv
 
 ROOT_ENV = "SIGNORINI_ROOT"
 SCENE_ENV = "SIGNORINI_SCENE"
 PREFERRED_SCENES = ("paper", "smoke")
 SMOKE_SCENE = "smoke"
-FIELDS_GRID = 161  # points per side of the u/f sample grid (the `sample` rule's n)
 
 
 # --- where ----------------------------------------------------------------------------------------
@@ -159,19 +162,19 @@ class Scene:
 
     @cached_property
     def diagonal(self) -> str:
-        return str(self.solution_info(self.Ns[0]).get("diagonal", "sw_ne"))
+        return str(self.solution_info(self.Ns[0]).get("diagonal", DEFAULT_DIAGONAL))
 
     @cached_property
     def conventions(self):
         """The norm conventions the scene's norm jobs used (from a norm JSON), else the defaults."""
-        from signorini.norms import Conventions
+        from signorini.fem.norms import Conventions
 
         for path in sorted((self.dir / f"N{self.Ns[0]}" / "norms").glob("*.json")):
             return Conventions(**load_json(path)["conventions"])
         return Conventions()
 
     def mesh(self, N: int):
-        from signorini.mesh import friedrichs_keller
+        from signorini.fem.mesh import friedrichs_keller
 
         return friedrichs_keller(int(N), self.diagonal)
 
@@ -186,7 +189,7 @@ class Scene:
         path = _path(self.root, "fields_npz", self.name)
         if path.exists():
             return load_npz(path)
-        t = np.linspace(0.0, 1.0, FIELDS_GRID)
+        t = np.linspace(0.0, 1.0, GRID)
         X, Y = np.meshgrid(t, t, indexing="xy")
         x = np.stack([X, Y])
         return {"x": X, "y": Y, "u": self.problem.u(x), "f": self.problem.f(x)}
@@ -197,8 +200,8 @@ class Scene:
         solution with the scene's conventions."""
         import pandas as pd
 
-        from signorini.mesh import mesh_width
-        from signorini.norms import evaluate_norms
+        from signorini.fem.mesh import mesh_width
+        from signorini.fem.norms import evaluate_norms
 
         rows = []
         for N in Ns or self.Ns:
@@ -218,10 +221,10 @@ def paper_reference(table: int, root: str | os.PathLike | None = None):
     """The published Table 1 or 2 (``workflow/reference/paper_table<k>.csv``) as a DataFrame indexed by row label."""
     import pandas as pd
 
-    from signorini.tables import read_table_csv
+    from signorini.studies.paper.reference import read_table_csv
 
     root = Path(root) if root is not None else project_root()
-    rows = read_table_csv(root / "workflow" / "reference" / f"paper_table{table}.csv")
+    rows = read_table_csv(root / REFERENCES[f"paper_table{table}"])
     return pd.DataFrame.from_dict(rows, orient="index")
 
 
@@ -229,7 +232,8 @@ def ours_table(scene: Scene, table: int):
     """Our Table 1 (errors) or Table 2 (EOCs, ``regr.``, ``theo.``) of a scene, indexed like the paper's."""
     import pandas as pd
 
-    from signorini.tables import TABLE1_NORMS, TABLE2_NORMS, THEORETICAL_ORDERS, h_label
+    from signorini.formatting import h_label
+    from signorini.paper import TABLE1_NORMS, TABLE2_NORMS, THEORETICAL_ORDERS
 
     if table == 1:
         df = scene.errors()
@@ -248,7 +252,7 @@ def side_by_side(scene: Scene, table: int):
     rows: the union of both tables' labels (a smoke scene shares no mesh with the paper)."""
     import pandas as pd
 
-    from signorini.tables import relative_deviation
+    from signorini.studies.paper.reference import relative_deviation
 
     ours, paper = ours_table(scene, table), paper_reference(table, scene.root)
     labels = list(ours.index) + [lab for lab in paper.index if lab not in ours.index]
@@ -277,24 +281,18 @@ def _denominator(label: str) -> int:
 
 
 def expected_orders(p: float) -> tuple[float, float]:
-    """The paper's expected orders (each minus ε) of ``‖u − u_h‖_{L^p}`` and ``‖u − u_h‖_{W^{1,p}}``:
-    ``(2, 1)`` for ``p ≤ 4``, ``(3/2 + 2/p, 1/2 + 2/p)`` beyond (``p = ∞``: ``(3/2, 1/2)``)."""
-    if p < 1:
-        raise ValueError(f"p={p} must be ≥ 1")
-    if p <= 4:
-        return 2.0, 1.0
-    return 1.5 + 2.0 / p, 0.5 + 2.0 / p
+    """The paper's expected orders (each minus ε) of ``‖u − u_h‖_{L^p}`` and ``‖u − u_h‖_{W^{1,p}}``
+    (``signorini.paper.expected_order``): ``(2, 1)`` for ``p ≤ 4``, ``(3/2 + 2/p, 1/2 + 2/p)`` beyond."""
+    from signorini.paper import expected_order
+
+    return expected_order("L", p), expected_order("W1", p)
 
 
 def norm_names(p: float) -> tuple[str, str]:
-    """The registry names of the ``L^p`` and ``W^{1,p}`` norms (``L6``, ``W16``, ``L2.5``, ``Linf``)."""
-    if math.isinf(p):
-        s = "inf"
-    elif float(p).is_integer():
-        s = str(int(p))
-    else:
-        s = repr(float(p))
-    return f"L{s}", f"W1{s}"
+    """The names of the ``L^p`` and ``W^{1,p}`` norms (``L6``, ``W16``, ``L2.5``, ``Linf``)."""
+    from signorini.fem.norm_names import lp_names
+
+    return lp_names(p)
 
 
 def rates_for_p(scene: Scene, p: float):
@@ -302,7 +300,7 @@ def rates_for_p(scene: Scene, p: float):
     meshes, next to the expected orders.  Returns ``(errors, rates)`` DataFrames."""
     import pandas as pd
 
-    from signorini.convergence import eoc, regression_slope
+    from signorini.fem.convergence import eoc, regression_slope
 
     names = norm_names(p)
     errors = scene.norms_for(names)
@@ -323,7 +321,7 @@ def rates_for_p(scene: Scene, p: float):
 def element_errors(problem: Problem, mesh, u_h: np.ndarray, conventions=None) -> dict[str, np.ndarray]:
     """Per triangle: ``max |u − u_h|`` over the ``L^∞`` point set and ``max |∇(u − u_h)|`` over the
     ``W^{1,∞}`` point set (``norms.error_field``), and the centroids — the error map."""
-    from signorini.norms import error_field
+    from signorini.fem.norms import error_field
 
     f = error_field(problem, mesh, u_h, conventions, norms=["Linf", "W1inf"])
     return {
@@ -348,7 +346,7 @@ def active_set_history(disc, **options):
     solver's own DEBUG log messages (``signorini.solvers.active_set``)."""
     import pandas as pd
 
-    from signorini.discrete import solve_discrete
+    from signorini.fem.solve import solve_discrete
 
     logger = logging.getLogger("signorini.solvers.active_set")
     handler, old_level = _Collect(), logger.level

@@ -1,5 +1,4 @@
-# Shared helpers: the package import, config checks, path templates, scenes, code inputs.
-import os
+# Shared helpers: the package import, config checks, the cache check, scenes and code inputs.
 import sys
 from pathlib import Path
 
@@ -11,16 +10,26 @@ os.environ.update(
     PYTHONPATH=os.pathsep.join(p for p in (SRC, os.environ.get("PYTHONPATH")) if p)
 )
 
-from signorini import pipeline
-from signorini.figures import FIGURE3_NORMS
-from signorini.tables import TABLE1_NORMS, TABLE2_NORMS
+from signorini.paper import FIGURE3_NORMS, TABLE1_NORMS, TABLE2_NORMS
+from signorini.pipeline import paths
+from signorini.pipeline.cache import cached_artifacts, quarantine_corrupt
+from signorini.pipeline.codedeps import code_inputs
+from signorini.pipeline.config import check_config
+from signorini.studies.stability import atlas as stab_atlas
+from signorini.studies.work_precision import study as wp_study
 
-pipeline.check_config(config)  # integer N, known norms (parse_norm), admissible problem
+# integer N, norm names of the grammar, admissible problem parameters
+check_config(config)
+# atlas blocks: case names, groups, problems, solver columns
+stab_atlas.check_atlases(config)
+for _name, _scene in config["scenes"].items():
+    if "study" in _scene:  # study blocks: reuse of the source scene's artifacts
+        wp_study.check_study(config["scenes"], _name)
 
 # A cached artifact damaged after it was written (truncated npz, incomplete JSON) is moved
 # to <name>.corrupt before Snakemake inspects any file, so that it is rebuilt, not read.
 if workflow.is_main_process:
-    pipeline.quarantine_corrupt(pipeline.cached_artifacts("results", config["scenes"]))
+    quarantine_corrupt(cached_artifacts("results", config["scenes"]))
 
 
 wildcard_constraints:
@@ -29,13 +38,16 @@ wildcard_constraints:
     norm=r"[A-Za-z0-9.]+",
 
 
-PATHS = pipeline.PATHS
-FIG = config.get("figures_scene", "paper")
-FIGDIR = "paper_figures"
+PATHS = paths.PATHS
+FIGURES = paths.FIGURES
+FIG = config["figures_scene"]  # the scene paper_figures/ is rendered from
+THEORY = "theory"  # the scene rendered into paper_figures/theory*
+WP = "work_precision"  # the scene rendered into paper_figures/work_precision*, cost_of_accuracy*
+STAB = "stability"  # the scene rendered into paper_figures/stability.*
 
 
 def scene_of(wildcards):
-    """The config block of the job's scene."""
+    """The config block of the job's scene (schema defaults filled in)."""
     name = wildcards if isinstance(wildcards, str) else wildcards.scene
     try:
         return config["scenes"][name]
@@ -45,9 +57,20 @@ def scene_of(wildcards):
         ) from None
 
 
-def code(stage):
-    """The package modules a stage runs (inputs, so that editing them reruns the stage)."""
-    return [f"src/signorini/{m}" for m in pipeline.STAGE_MODULES[stage]]
+def scene_param(key):
+    """A params function: the job's scene's ``key`` (problem, diagonal, conventions, ...)."""
+    return lambda wc: scene_of(wc)[key]
+
+
+def code(script):
+    """A rule's code inputs: its script and every package module the script imports, directly
+    or indirectly (signorini.pipeline.codedeps), so that an edit reruns exactly its jobs.
+    """
+    return code_inputs(
+        Path(workflow.basedir) / "workflow" / "scripts" / f"{script}.py",
+        SRC,
+        os.getcwd(),
+    )
 
 
 def norm_jsons(scene, norms):
@@ -60,20 +83,114 @@ def norm_jsons(scene, norms):
 
 
 def flat(mapping):
-    return [p for paths in mapping.values() for p in paths]
+    return [p for values in mapping.values() for p in values]
 
 
-PAPER_FIGURES = [
-    *expand(
-        f"{FIGDIR}/{{name}}.{{ext}}",
-        name=["table1", "table2"],
-        ext=["csv", "md", "tex"],
+PAPER_OUTPUTS = [
+    *(
+        path
+        for rule in (
+            "table1",
+            "table2",
+            "figure2",
+            "figure3",
+            "reproduction",
+            "runtime",
+        )
+        for path in FIGURES[rule].values()
     ),
-    *expand(
-        f"{FIGDIR}/{{name}}.{{ext}}", name=["figure2", "figure3"], ext=["pdf", "png"]
-    ),
-    f"{FIGDIR}/reproduction.md",
-    f"{FIGDIR}/runtime.csv",
     PATHS["errors_csv"].format(scene=FIG),
     PATHS["eoc_csv"].format(scene=FIG),
 ]
+
+
+# --- the paper's run times ---
+
+
+def runtime_jobs(scene):
+    """The discretise, solve and norm jobs of a scene whose run times runtime.csv reports."""
+    norms = list(
+        dict.fromkeys([*scene_of(scene)["norms"], *TABLE1_NORMS, *FIGURE3_NORMS])
+    )
+    jobs = []
+    for N in scene_of(scene)["N"]:
+        for rule, name, norm in (
+            ("discretise", "discretise", ""),
+            ("solve", "solve", ""),
+        ):
+            artifact = getattr(rules, rule).output.json
+            jobs.append((rule, N, norm, name, artifact.format(scene=scene, N=N)))
+        for n in norms:
+            artifact = rules.norm.output.json.format(scene=scene, N=N, norm=n)
+            jobs.append(("norm", N, n, f"norm_{n}", artifact))
+    return [
+        {
+            "rule": rule,
+            "scene": scene,
+            "N": N,
+            "norm": norm,
+            "benchmark": paths.benchmark("mesh", name, scene=scene, N=str(N)),
+            "artifact": artifact,
+        }
+        for rule, N, norm, name, artifact in jobs
+    ]
+
+
+# --- the work-precision study ---
+
+
+def study_of(wildcards):
+    """The `study` block of the job's scene."""
+    study = scene_of(wildcards).get("study")
+    if study is None:
+        raise ValueError(f"scene {wildcards.scene!r} has no study block")
+    return study
+
+
+def wp_configs(scene):
+    """{name: SolverConfig} of a scene's study (imports cvxpy: call only when planning jobs)."""
+    from signorini.solvers import installed_qp_solvers
+
+    return wp_study.study_configs(study_of(scene), installed_qp_solvers())
+
+
+def wp_source(path):
+    """An input function: ``path`` (a template) of the study's source scene for the job's N."""
+    return lambda wc: path.format(scene=study_of(wc)["source"], N=wc.N)
+
+
+def wp_previous(wildcards):
+    """This configuration's artifact on the previous mesh of the scene (none for the first)."""
+    Ns = scene_of(wildcards)["N"]
+    k = Ns.index(int(wildcards.N))
+    if k == 0:
+        return []
+    return PATHS["wp_measure_json"].format(
+        scene=wildcards.scene, N=Ns[k - 1], solver=wildcards.solver
+    )
+
+
+def wp_disc_norms(wildcards):
+    """{norm: the source scene's norm artifact of this N}: the discretisation errors."""
+    source, N = study_of(wildcards)["source"], wildcards.N
+    return {
+        n: rules.norm.output.json.format(scene=source, N=N, norm=n)
+        for n in scene_of(wildcards)["norms"]
+    }
+
+
+def wp_measure_jsons(scene):
+    """Every measurement artifact of a scene: one per (N, solver configuration)."""
+    return [
+        PATHS["wp_measure_json"].format(scene=scene, N=N, solver=name)
+        for N in scene_of(scene)["N"]
+        for name in wp_configs(scene)
+    ]
+
+
+# --- the stability atlas ---
+
+
+def atlas_of(scene):
+    """The parsed atlas of a scene."""
+    return stab_atlas.scene_atlas(config, scene)

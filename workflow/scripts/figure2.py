@@ -1,10 +1,9 @@
 """rule figure2: paper_figures/figure2.{pdf,png} (u and f)."""
 
-from signorini.artifacts import load_npz
-from signorini.figures import figure2
-from signorini.pipeline import job_log
+from signorini.pipeline.joblog import job_log
+from signorini.studies.paper.figures import figure2_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake.log[0]):
-    figure2(load_npz(snakemake.input.fields), snakemake.output.pdf, snakemake.output.png)
+    figure2_stage(snakemake.input.fields[0], snakemake.output.pdf, snakemake.output.png)

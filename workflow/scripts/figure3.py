@@ -1,9 +1,10 @@
 """rule figure3: paper_figures/figure3.{pdf,png} (L4 and W14 errors against h)."""
 
-from signorini.figures import figure3
-from signorini.pipeline import job_log, read_errors
+from signorini.pipeline.joblog import job_log
+from signorini.studies.paper.figures import figure3_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake.log[0]):
-    figure3(read_errors(snakemake.params.N, snakemake.params.norm_jsons), snakemake.output.pdf, snakemake.output.png)
+    p, o = snakemake.params, snakemake.output
+    figure3_stage(p.N, p.norm_jsons, o.pdf, o.png)

@@ -1,16 +1,11 @@
-"""rule solve: mesh, assemble and solve (S_h) for one scene and N."""
+"""rule solve: solve (S_h) of one scene and N on its assembled system."""
 
-from signorini.pipeline import job_log, solve_stage
+from signorini.pipeline.joblog import job_log
+from signorini.studies.scene.solve import solve_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake.log[0]):
-    solve_stage(
-        snakemake.params.problem,
-        int(snakemake.wildcards.N),
-        snakemake.params.solver,
-        snakemake.output.npz,
-        snakemake.output.json,
-        diagonal=snakemake.params.diagonal,
-        solver_options=snakemake.params.solver_options,
-    )
+    p, o = snakemake.params, snakemake.output
+    N = int(snakemake.wildcards.N)
+    solve_stage(p.problem, N, p.diagonal, snakemake.input.system, p.solver, o.npz, o.json, p.solver_options)

@@ -1,7 +1,7 @@
 """rule stability_case: one case of the stability atlas, every solver column."""
 
-from signorini.pipeline import job_log
-from signorini.stability import case_stage
+from signorini.pipeline.joblog import job_log
+from signorini.studies.stability.cases import case_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 

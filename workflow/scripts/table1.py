@@ -1,10 +1,9 @@
 """rule table1: paper_figures/table1.{csv,md,tex}."""
 
-from signorini.pipeline import job_log, read_errors
-from signorini.tables import table1
+from signorini.pipeline.joblog import job_log
+from signorini.studies.paper.tables import table1_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake.log[0]):
-    errors = read_errors(snakemake.params.N, snakemake.params.norm_jsons)
-    table1(errors, snakemake.output.csv, snakemake.output.md, snakemake.output.tex)
+    table1_stage(snakemake.params.N, snakemake.params.norm_jsons, snakemake.output)

@@ -1,10 +1,9 @@
 """rule table2: paper_figures/table2.{csv,md,tex}."""
 
-from signorini.pipeline import job_log, read_errors_csv
-from signorini.tables import table2
+from signorini.pipeline.joblog import job_log
+from signorini.studies.paper.tables import table2_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake.log[0]):
-    eoc = read_errors_csv(snakemake.input.eoc)
-    table2(eoc, snakemake.params.N, snakemake.output.csv, snakemake.output.md, snakemake.output.tex)
+    table2_stage(snakemake.input.eoc[0], snakemake.params.N, snakemake.output)

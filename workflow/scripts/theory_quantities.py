@@ -1,14 +1,10 @@
 """rule theory_quantities: supercloseness, discrete H^{1/2} norm, contact set for one scene and N."""
 
-from signorini.pipeline import job_log, theory_stage
+from signorini.pipeline.joblog import job_log
+from signorini.studies.theory.quantities import quantities_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake.log[0]):
-    theory_stage(
-        snakemake.params.problem,
-        int(snakemake.wildcards.N),
-        snakemake.input.solution,
-        snakemake.output[0],
-        diagonal=snakemake.params.diagonal,
-    )
+    p = snakemake.params
+    quantities_stage(p.problem, int(snakemake.wildcards.N), p.diagonal, snakemake.input.solution, snakemake.output.json)

@@ -1,25 +1,28 @@
 """rule work_precision_measure: one solver configuration at all its tolerances on one mesh."""
 
-from signorini.pipeline import job_log
-from signorini.work_precision import measure_stage
+from signorini.pipeline.joblog import job_log
+from signorini.studies.work_precision.measure import measure_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake.log[0]):
-    p = snakemake.params
+    p, i = snakemake.params, snakemake.input
+    inputs = {
+        "system": i.system,
+        "system_json": i.system_json,
+        "exact": i.exact,
+        "disc": p.disc_norm_jsons,
+        "prev": i.prev or None,
+    }
     measure_stage(
         p.problem,
         int(snakemake.wildcards.N),
+        p.diagonal,
         p.config,
         p.tolerances,
         p.time_limit_s,
-        snakemake.input.system,
-        snakemake.input.system_json,
-        snakemake.input.exact,
-        p.disc_norm_jsons,
-        snakemake.output[0],
-        prev_json=snakemake.input.prev or None,
-        diagonal=p.diagonal,
+        inputs,
+        snakemake.output.json,
         conventions=p.conventions,
         growth_exponent=p.growth_exponent,
     )

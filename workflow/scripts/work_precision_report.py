@@ -1,10 +1,10 @@
 """rule work_precision_report: paper_figures/work_precision.md (the findings in numbers)."""
 
-from signorini.pipeline import job_log
-from signorini.work_precision_report import report_stage
+from signorini.pipeline.joblog import job_log
+from signorini.studies.work_precision.report import report_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake.log[0]):
     i = snakemake.input
-    report_stage(i.csv, i.paper_table1, i.paper_table2, snakemake.output[0], source=snakemake.params.source)
+    report_stage(i.csv, i.paper_table1, i.paper_table2, snakemake.output.md, source=snakemake.params.source)

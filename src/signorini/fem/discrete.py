@@ -1,0 +1,54 @@
+"""The discrete Signorini problem (S_h) on a Friedrichs–Keller mesh (``fem.solve`` solves it).
+
+``(u_h, v_h - u_h)_{H¹} ≥ (f, v_h - u_h)`` for all ``v_h ∈ K_h = {v_h ∈ V_h : v_h ≥ 0 on ∂Ω}``;
+with P1 elements this is the QP ``min ½ uᵀAu - bᵀu`` s.t. ``u_i ≥ 0`` at boundary nodes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from skfem import MeshTri
+
+from signorini.fem.assembly import assemble
+from signorini.fem.mesh import DEFAULT_DIAGONAL, boundary_nodes, friedrichs_keller
+from signorini.fem.problem import Problem
+
+
+@dataclass
+class DiscreteProblem:
+    """Mesh, ``A = K + c M``, ``b = ∫ f φ`` and the constrained (boundary) nodes."""
+
+    problem: Problem
+    N: int
+    diagonal: str
+    mesh: MeshTri
+    A: sp.csr_matrix
+    b: np.ndarray
+    boundary: np.ndarray
+
+
+def build(problem: Problem, N: int, diagonal: str = DEFAULT_DIAGONAL) -> DiscreteProblem:
+    """Mesh and assemble (S_h) for ``N`` cells per side."""
+    mesh = friedrichs_keller(N, diagonal)
+    A, b = assemble(mesh, problem)
+    return DiscreteProblem(problem, int(N), diagonal, mesh, A, b, boundary_nodes(mesh))
+
+
+def interpolate_fk(N: int, diagonal: str, values: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Evaluate the P1 function ``values`` on the (unjittered) Friedrichs–Keller mesh
+    ``friedrichs_keller(N, diagonal)`` at ``points`` (shape (2, m)), by direct cell location."""
+    V = np.asarray(values).reshape(N + 1, N + 1)  # vertex (i, j) at (i/N, j/N), see mesh.py
+    xs, ys = np.clip(points[0] * N, 0.0, N), np.clip(points[1] * N, 0.0, N)
+    i, j = np.minimum(xs.astype(int), N - 1), np.minimum(ys.astype(int), N - 1)
+    xi, eta = xs - i, ys - j
+    v00, v10, v01, v11 = V[i, j], V[i + 1, j], V[i, j + 1], V[i + 1, j + 1]
+    if diagonal == "sw_ne":
+        lower = v00 + xi * (v10 - v00) + eta * (v11 - v10)
+        upper = v00 + eta * (v01 - v00) + xi * (v11 - v01)
+        return np.where(xi >= eta, lower, upper)
+    lower = v00 + xi * (v10 - v00) + eta * (v01 - v00)
+    upper = v11 + (1.0 - xi) * (v01 - v11) + (1.0 - eta) * (v10 - v11)
+    return np.where(xi + eta <= 1.0, lower, upper)

@@ -1,0 +1,81 @@
+"""The grammar of norm names, defined once.
+
+=============  =====================================================================
+``Lp``         ``L^p(Ω)`` for any p ≥ 1 (``L2``, ``L4``, ``L16``, ``L2.5``); ``Linf``
+``Lp<part>``   ``‖(u − u_h)^±‖_{L^p}`` with ``<part>`` = ``plus`` or ``minus``
+``W1p``        ``W^{1,p}(Ω)`` (``W14``, ``W116``); ``W1inf``
+``H1``         ``H¹(Ω)``
+``H12``        ``H^{1/2}(∂Ω)``
+``L2boundary`` ``L²(∂Ω)``
+=============  =====================================================================
+
+``parse_norm_name`` is the only parser: the norms (``fem.norms``), the exact norms of a P1
+function (``fem.p1norms``), the expected rates and the labels (``signorini.paper``) all use it.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+_PATTERN = re.compile(r"^(?P<family>L|W1)(?P<p>inf|\d+(?:\.\d+)?)(?P<part>plus|minus)?$")
+BOUNDARY_NORMS = ("H12", "L2boundary")  # norms of the trace on ∂Ω
+
+
+class UnknownNormError(ValueError):
+    """A norm name outside the grammar."""
+
+
+@dataclass(frozen=True)
+class NormName:
+    """A parsed norm name: ``family`` is ``L``, ``W1``, ``H1``, ``H12`` or ``L2boundary``;
+    ``p`` the exponent of ``L``/``W1`` (``math.inf`` for ``inf``; 2 for ``H1``; None for the
+    boundary norms); ``part`` is ``""``, ``"plus"`` or ``"minus"``."""
+
+    name: str
+    family: str
+    p: float | None
+    part: str = ""
+
+    @property
+    def on_boundary(self) -> bool:
+        return self.family in BOUNDARY_NORMS
+
+    @property
+    def is_max(self) -> bool:
+        """A maximum norm (``Linf``, ``W1inf``): evaluated on a point set, not integrated."""
+        return self.p is not None and math.isinf(self.p)
+
+    @property
+    def is_lp_family(self) -> bool:
+        """``L^p`` or ``W^{1,p}`` of the whole error (no one-sided part): the rate-against-p norms."""
+        return self.family in ("L", "W1") and not self.part
+
+
+def parse_norm_name(name: str) -> NormName:
+    """Parse ``name``; raises ``UnknownNormError`` outside the grammar (or for p < 1)."""
+    if name == "H1":
+        return NormName(name, "H1", 2.0)
+    if name in BOUNDARY_NORMS:
+        return NormName(name, name, None)
+    m = _PATTERN.match(str(name))
+    if m is None or (m["family"] == "W1" and m["part"]):
+        raise UnknownNormError(
+            f"unknown norm {name!r}; use Lp, Linf, W1p, W1inf (p ≥ 1), H1, H12, L2boundary, or Lp/Linf with plus/minus"
+        )
+    p = math.inf if m["p"] == "inf" else float(m["p"])
+    if p < 1.0:
+        raise UnknownNormError(f"norm {name!r}: need p ≥ 1")
+    return NormName(name, m["family"], p, m["part"] or "")
+
+
+def lp_names(p: float) -> tuple[str, str]:
+    """The names of the ``L^p`` and ``W^{1,p}`` norms (``L6``/``W16``, ``L2.5``/``W12.5``, ``Linf``/``W1inf``)."""
+    if math.isinf(p):
+        s = "inf"
+    elif float(p).is_integer():
+        s = str(int(p))
+    else:
+        s = repr(float(p))
+    return f"L{s}", f"W1{s}"

@@ -1,0 +1,103 @@
+"""Atomic writes and checked reads of the cached artifacts.
+
+Every file is written to a temporary sibling and renamed into place, so a
+killed job never leaves a half-written file under the final name.  ``.npz``
+archives carry a ``_checksum`` of their arrays, and JSON files a ``"_complete"``
+marker; a truncated or tampered file raises ``CorruptArtifactError`` on load.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import os
+import tempfile
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+
+class CorruptArtifactError(RuntimeError):
+    """A cached artifact is unreadable, truncated or fails its checksum."""
+
+
+def _atomic_write(path: str | os.PathLike, write) -> None:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            write(fh)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def _digest(arrays: dict[str, np.ndarray]) -> str:
+    h = hashlib.sha256()
+    for key in sorted(arrays):
+        a = np.ascontiguousarray(arrays[key])
+        h.update(key.encode())
+        h.update(str(a.dtype).encode())
+        h.update(str(a.shape).encode())
+        h.update(a.tobytes())
+    return h.hexdigest()
+
+
+def save_npz(path: str | os.PathLike, **arrays: np.ndarray) -> None:
+    """Write arrays atomically with a SHA-256 checksum."""
+    arrays = {k: np.asarray(v) for k, v in arrays.items()}
+    checksum = np.frombuffer(_digest(arrays).encode(), dtype=np.uint8)
+    _atomic_write(path, lambda fh: np.savez(fh, _checksum=checksum, **arrays))
+
+
+def load_npz(path: str | os.PathLike) -> dict[str, np.ndarray]:
+    """Read an archive written by ``save_npz`` and verify its checksum."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            arrays = {k: data[k] for k in data.files}
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
+        raise CorruptArtifactError(f"{path}: unreadable archive ({err})") from err
+    stored = arrays.pop("_checksum", None)
+    if stored is None or stored.tobytes().decode() != _digest(arrays):
+        raise CorruptArtifactError(f"{path}: checksum mismatch (truncated or modified)")
+    return arrays
+
+
+def save_json(path: str | os.PathLike, data: dict) -> None:
+    """Write a JSON object atomically with a completeness marker."""
+    text = json.dumps({**data, "_complete": True}, indent=2, sort_keys=True, default=float)
+    _atomic_write(path, lambda fh: fh.write(text.encode()))
+
+
+def load_json(path: str | os.PathLike) -> dict:
+    """Read a JSON object written by ``save_json``."""
+    try:
+        data = json.loads(Path(path).read_text())
+    except (OSError, ValueError) as err:
+        raise CorruptArtifactError(f"{path}: unreadable JSON ({err})") from err
+    if not isinstance(data, dict) or data.pop("_complete", None) is not True:
+        raise CorruptArtifactError(f"{path}: incomplete JSON artifact")
+    return data
+
+
+def atomic_write_text(path: str | os.PathLike, text: str) -> None:
+    """Write a text file (tables, markdown) atomically."""
+    _atomic_write(path, lambda fh: fh.write(text.encode()))
+
+
+def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
+    """Write a binary file (figures) atomically."""
+    _atomic_write(path, lambda fh: fh.write(data))
+
+
+def atomic_write_csv(frame, path: str | os.PathLike) -> None:
+    """Write a DataFrame as CSV atomically (no index; floats round-trip, shortest repr)."""
+    buf = io.StringIO()
+    frame.to_csv(buf, index=False, lineterminator="\n")
+    atomic_write_text(path, buf.getvalue())

@@ -1,0 +1,104 @@
+"""The code a workflow job runs, derived from the imports.
+
+``code_inputs(script, src)`` is the static import closure of a rule's script within the
+package under ``src``: every ``import``/``from … import`` of a ``signorini`` module (at module
+level or inside a function, where the heavy imports live; not under ``if TYPE_CHECKING:``,
+which never runs), followed recursively, plus the ``__init__.py`` of every package on the way
+(Python runs them on import).  The Snakefile lists the result as the rule's ``code`` input, so
+editing any module a job can run re-runs that job, and nothing else.
+"""
+
+from __future__ import annotations
+
+import ast
+import os
+from collections.abc import Iterator
+from functools import cache
+from pathlib import Path
+
+PACKAGE = "signorini"
+
+
+def _is_type_checking(test: ast.expr) -> bool:
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
+    )
+
+
+def _imports(tree: ast.AST, module: str, is_package: bool) -> Iterator[str]:
+    """Dotted names a module imports (absolute; ``from x import y`` also yields ``x.y``,
+    which is a module if ``y`` is one)."""
+    stack = [tree]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, ast.If) and _is_type_checking(node.test):
+            stack.extend(node.orelse)
+            continue
+        if isinstance(node, ast.Import):
+            yield from (alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:  # relative: resolve against this module's package
+                parts = module.split(".")
+                anchor = parts if is_package else parts[:-1]
+                anchor = anchor[: len(anchor) - (node.level - 1)]
+                base = ".".join([*anchor, base] if base else anchor)
+            yield base
+            yield from (f"{base}.{alias.name}" for alias in node.names if alias.name != "*")
+        stack.extend(ast.iter_child_nodes(node))
+
+
+def _module_file(name: str, src: Path) -> Path | None:
+    """The file of a package module under ``src`` (``a/b.py`` or ``a/b/__init__.py``), or None."""
+    if name != PACKAGE and not name.startswith(PACKAGE + "."):
+        return None
+    base = src.joinpath(*name.split("."))
+    for path in (base.with_suffix(".py"), base / "__init__.py"):
+        if path.is_file():
+            return path
+    return None
+
+
+def _module_name(path: Path, src: Path) -> str:
+    rel = path.relative_to(src).with_suffix("")
+    parts = list(rel.parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+@cache
+def _direct(path: Path, src: Path, mtime_ns: int) -> frozenset[Path]:
+    """Package files one file imports directly (with the ``__init__.py`` of their packages)."""
+    module = _module_name(path, src) if path.is_relative_to(src) else "__main__"
+    tree = ast.parse(path.read_text(), filename=str(path))
+    found: set[Path] = set()
+    for name in _imports(tree, module, path.name == "__init__.py"):
+        parts = name.split(".")
+        for k in range(1, len(parts) + 1):  # the packages on the way run too
+            target = _module_file(".".join(parts[:k]), src)
+            if target is not None:
+                found.add(target)
+    found.discard(path)
+    return frozenset(found)
+
+
+def import_closure(path: str | os.PathLike, src: str | os.PathLike) -> list[Path]:
+    """Every package file under ``src`` that ``path`` imports, directly or indirectly (sorted;
+    ``path`` itself is included when it lies under ``src``)."""
+    path, src = Path(path).resolve(), Path(src).resolve()
+    seen: set[Path] = {path} if path.is_relative_to(src) else set()
+    todo = [path]
+    while todo:
+        current = todo.pop()
+        for target in _direct(current, src, current.stat().st_mtime_ns):
+            if target not in seen:
+                seen.add(target)
+                todo.append(target)
+    return sorted(seen)
+
+
+def code_inputs(script: str | os.PathLike, src: str | os.PathLike, relative_to: str | os.PathLike) -> list[str]:
+    """The rule's code inputs: its script and the package files it runs, as paths relative to
+    ``relative_to`` (the workflow's working directory)."""
+    base = Path(relative_to).resolve()
+    files = [Path(script).resolve(), *import_closure(script, src)]
+    return [os.path.relpath(f, base) for f in dict.fromkeys(files)]

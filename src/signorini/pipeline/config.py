@@ -1,0 +1,62 @@
+"""Semantic checks of the workflow configuration beyond its JSON schema.
+
+The Snakefile validates the config against ``workflow/schemas/config.schema.yaml`` (which also
+fills in the defaults, e.g. ``diagonal: sw_ne``) and then calls ``check_config``; every error
+names the offending field, e.g. ``scenes.paper.N[1]: 201.0 is not an integer``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+
+class ConfigError(ValueError):
+    """The workflow configuration is invalid; the message names the offending field."""
+
+
+def _check_N(where: str, Ns: list) -> None:
+    for i, N in enumerate(Ns):
+        if isinstance(N, bool) or not isinstance(N, int):
+            raise ConfigError(f"{where}.N[{i}]: {N!r} is not an integer (cells per side)")
+        if N < 1:
+            raise ConfigError(f"{where}.N[{i}]: {N} must be ≥ 1")
+    if len(set(Ns)) != len(Ns):
+        raise ConfigError(f"{where}.N: values must be unique, got {Ns}")
+
+
+def _check_norms(where: str, norms: list) -> None:
+    from signorini.fem.norm_names import UnknownNormError, parse_norm_name
+
+    for i, norm in enumerate(norms):
+        try:
+            parse_norm_name(norm)
+        except UnknownNormError as err:
+            raise ConfigError(f"{where}.norms[{i}]: {err}") from None
+    if len(set(norms)) != len(norms):
+        raise ConfigError(f"{where}.norms: names must be unique, got {norms}")
+
+
+def check_config(config: Mapping) -> None:
+    """Semantic checks of a schema-valid config: integer ``N`` (not ``101.0``), unique ``N``,
+    norm names of the grammar (``fem.norm_names``), admissible problem parameters and conventions."""
+    from signorini.fem.norms import Conventions
+    from signorini.fem.problem import Problem, ProblemParameterError
+
+    scenes = config.get("scenes") or {}
+    if not scenes:
+        raise ConfigError("scenes: at least one scene is required")
+    for name, scene in scenes.items():
+        where = f"scenes.{name}"
+        _check_N(where, scene.get("N", []))
+        _check_norms(where, scene.get("norms", []))
+        try:
+            Problem(**scene.get("problem", {}))
+        except (ProblemParameterError, TypeError) as err:
+            raise ConfigError(f"{where}.problem: {err}") from None
+        try:
+            Conventions(**scene.get("conventions", {}))
+        except (ValueError, TypeError) as err:
+            raise ConfigError(f"{where}.conventions: {err}") from None
+    fig = config.get("figures_scene")
+    if fig is not None and fig not in scenes:
+        raise ConfigError(f"figures_scene: {fig!r} is not one of the scenes {sorted(scenes)}")

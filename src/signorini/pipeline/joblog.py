@@ -1,0 +1,51 @@
+"""The log of one workflow job."""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
+log = logging.getLogger("signorini.job")
+MODULES_LINE = "modules run: %s"  # the last line of a job's log file
+
+
+def loaded_modules() -> list[str]:
+    """The package's modules loaded in this interpreter (sorted), as logged at the end of a job."""
+    return sorted(m for m in sys.modules if m == "signorini" or m.startswith("signorini."))
+
+
+@contextlib.contextmanager
+def job_log(path: str | os.PathLike | None) -> Iterator[logging.Logger]:
+    """Log to the job's log file (and stderr); an exception is logged with its traceback, then
+    re-raised.  The log file's last line names the package modules the job ran (``loaded_modules``), which
+    the tests compare with the rule's code inputs."""
+    root = logging.getLogger()
+    handlers: list[logging.Handler] = [logging.StreamHandler(sys.stderr)]
+    if path:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        handlers.append(logging.FileHandler(path, mode="w"))
+    file_handlers = handlers[1:]
+    fmt = logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s")
+    for handler in handlers:
+        handler.setFormatter(fmt)
+        root.addHandler(handler)
+    pkg = logging.getLogger("signorini")
+    old_level = pkg.level
+    pkg.setLevel(logging.INFO)  # the package's messages; other libraries stay at WARNING
+    try:
+        yield log
+        record = log.makeRecord(log.name, logging.INFO, __file__, 0, MODULES_LINE, (" ".join(loaded_modules()),), None)
+        for handler in file_handlers:  # the log file only: the console stays short
+            handler.handle(record)
+    except BaseException:
+        log.exception("job failed")
+        raise
+    finally:
+        for handler in handlers:
+            root.removeHandler(handler)
+            handler.close()
+        pkg.setLevel(old_level)

@@ -1,0 +1,92 @@
+"""Every path of the workflow, defined once: cached artifacts, logs, benchmark files, the
+published reference tables and the rendered outputs in ``paper_figures/``.
+
+Templates use Snakemake's wildcards (``{scene}``, ``{N}``, ``{norm}``, ``{case}``, ``{solver}``);
+the rules, the cache checks, the notebooks' helpers and the tests all read them from here.
+"""
+
+from __future__ import annotations
+
+FIGDIR = "paper_figures"
+REFERENCE = "workflow/reference"
+_MESH = "results/{scene}/N{N}"
+
+PATHS = {
+    # the chain of every scene: discretise -> solve -> norm -> errors/eoc
+    "system_npz": f"{_MESH}/system.npz",
+    "system_json": f"{_MESH}/system.json",
+    "solution_npz": f"{_MESH}/solution.npz",
+    "solution_json": f"{_MESH}/solution.json",
+    "norm_json": f"{_MESH}/norms/{{norm}}.json",
+    "errors_csv": "results/{scene}/errors.csv",
+    "eoc_csv": "results/{scene}/eoc.csv",
+    "fields_npz": "results/{scene}/fields.npz",
+    # the studies beyond the paper
+    "theory_json": f"{_MESH}/theory.json",
+    "atlas_case_json": "results/{scene}/atlas/{case}.json",
+    "atlas_case_npz": "results/{scene}/atlas/{case}.npz",
+    "wp_measure_json": f"{_MESH}/work_precision/{{solver}}.json",
+}
+
+# one log and (for the computing rules) one benchmark file per job; {name} is the rule's
+# file stem, e.g. "solve" or "norm_{norm}"
+LOGS = {
+    "mesh": "results/{scene}/logs/N{N}/{name}.log",
+    "scene": "results/{scene}/logs/{name}.log",
+    "case": "results/{scene}/logs/atlas/{case}.log",
+}
+BENCHMARKS = {
+    "mesh": "results/{scene}/benchmarks/N{N}/{name}.tsv",
+    "case": "results/{scene}/benchmarks/atlas/{case}.tsv",
+}
+
+REFERENCES = {
+    "paper_table1": f"{REFERENCE}/paper_table1.csv",
+    "paper_table2": f"{REFERENCE}/paper_table2.csv",
+    "remarks": f"{REFERENCE}/deviation_remarks.md",
+}
+
+
+def _outputs(name: str, *exts: str) -> dict[str, str]:
+    return {ext: f"{FIGDIR}/{name}.{ext}" for ext in exts}
+
+
+# the rendered outputs, by rule: {name: path}
+FIGURES = {
+    "table1": _outputs("table1", "csv", "md", "tex"),
+    "table2": _outputs("table2", "csv", "md", "tex"),
+    "figure2": _outputs("figure2", "pdf", "png"),
+    "figure3": _outputs("figure3", "pdf", "png"),
+    "reproduction": _outputs("reproduction", "md"),
+    "runtime": _outputs("runtime", "csv"),
+    "theory_report": {
+        **_outputs("theory", "md", "csv"),
+        **{f"rates_{k}": v for k, v in _outputs("theory_rates", "pdf", "png").items()},
+        **{f"extra_{k}": v for k, v in _outputs("theory_extra", "pdf", "png").items()},
+    },
+    "work_precision_table": _outputs("work_precision", "csv"),
+    "work_precision_figures": {
+        **_outputs("work_precision", "pdf", "png"),
+        **{f"cost_{k}": v for k, v in _outputs("cost_of_accuracy", "pdf", "png").items()},
+    },
+    "work_precision_report": _outputs("work_precision", "md"),
+    "stability_atlas": _outputs("stability", "csv", "md", "pdf", "png"),
+}
+
+
+def log(kind: str, name: str, **wildcards: str) -> str:
+    """A log path template (``kind``: ``mesh``, ``scene`` or ``case``), wildcards left open
+    unless given: ``log("mesh", "solve")`` -> ``results/{scene}/logs/N{N}/solve.log``."""
+    return LOGS[kind].replace("{name}", name).format_map(_Open(wildcards))
+
+
+def benchmark(kind: str, name: str, **wildcards: str) -> str:
+    """A benchmark path template, like ``log``."""
+    return BENCHMARKS[kind].replace("{name}", name).format_map(_Open(wildcards))
+
+
+class _Open(dict):
+    """Format mapping that leaves unknown wildcards as they are."""
+
+    def __missing__(self, key: str) -> str:
+        return "{" + key + "}"

@@ -1,0 +1,57 @@
+"""Stage ``runtime``: ``paper_figures/runtime.csv``, the run times of the rendered scene's
+``discretise``, ``solve`` and ``norm`` jobs."""
+
+from __future__ import annotations
+
+import csv
+import io
+import os
+from collections.abc import Mapping, Sequence
+
+from signorini.pipeline.artifacts import CorruptArtifactError, atomic_write_text, load_json
+
+BENCHMARK_FIELDS = {"s": "benchmark_wall_s", "cpu_time": "benchmark_cpu_s", "max_rss": "benchmark_max_rss_mb"}
+# the in-job timer of each rule: (keys of the artifact's timings summed, what they cover)
+TIMERS = {
+    "discretise": (("build_s",), "mesh + assembly"),
+    "solve": (("load_s", "solve_s"), "load system + solve"),
+    "norm": (("mesh_s", "norm_s"), "mesh + error evaluation + norm"),
+}
+COLUMNS = ["rule", "scene", "N", "norm", *BENCHMARK_FIELDS.values(), "timer_s", "timer_scope"]
+
+
+def _last_benchmark(path: str | os.PathLike) -> Mapping[str, str]:
+    with open(path) as fh:
+        rows = list(csv.DictReader(fh, delimiter="\t"))
+    if not rows:
+        raise CorruptArtifactError(f"{path}: empty benchmark file")
+    return rows[-1]
+
+
+def _timer(rule: str, artifact: Mapping) -> float:
+    """The in-job timer of a job's artifact (its ``timings``)."""
+    timings = artifact.get("timings", {})
+    return sum(float(timings.get(key, 0.0)) for key in TIMERS[rule][0])
+
+
+def collect_runtime(jobs: Sequence[Mapping], out_csv: str | os.PathLike) -> None:
+    """``runtime.csv`` from the jobs' ``benchmark:`` files and their in-job timers.
+
+    ``jobs``: one mapping per job with ``rule``, ``scene``, ``N``, ``norm`` (or ""),
+    ``benchmark`` (the TSV path) and ``artifact`` (the job's JSON, holding its timers).
+    ``benchmark_*`` columns time the whole job (interpreter start, imports, I/O);
+    ``timer_s`` is the timer around the measured call inside the job (``timer_scope``).
+    """
+    out = io.StringIO()
+    writer = csv.DictWriter(out, COLUMNS, lineterminator="\n")
+    writer.writeheader()
+    for job in jobs:
+        bench = _last_benchmark(job["benchmark"])
+        record = {"rule": job["rule"], "scene": job["scene"], "N": int(job["N"]), "norm": job.get("norm", "")}
+        for key, column in BENCHMARK_FIELDS.items():
+            value = bench.get(key, "")
+            record[column] = f"{float(value):.3f}" if value not in ("", "NA", "-") else ""
+        record["timer_s"] = f"{_timer(job['rule'], load_json(job['artifact'])):.3f}"
+        record["timer_scope"] = TIMERS[job["rule"]][1]
+        writer.writerow(record)
+    atomic_write_text(out_csv, out.getvalue())

@@ -1,0 +1,22 @@
+"""Stage ``sample``: ``u`` and ``f`` on a grid of the unit square, the data of Figure 2."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+
+import numpy as np
+
+from signorini.fem.problem import Problem
+from signorini.pipeline.artifacts import save_npz
+
+GRID = 161  # points per side
+
+
+def sample_stage(problem_params: Mapping, n: int, out_npz: str | os.PathLike) -> None:
+    """``u`` and ``f`` on an ``n × n`` grid of the unit square."""
+    problem = Problem.from_params(problem_params)
+    t = np.linspace(0.0, 1.0, int(n))
+    X, Y = np.meshgrid(t, t, indexing="xy")
+    x = np.stack([X, Y])
+    save_npz(out_npz, x=X, y=Y, u=problem.u(x), f=problem.f(x))

@@ -1,0 +1,85 @@
+"""Reading the scene chain's artifacts back, checked: the assembled system, the solution,
+the norm values and the ``errors.csv``/``eoc.csv`` tables.
+
+Kept apart from the stages that write them, so that a reader (a norm job, a renderer) does not
+run the solver's code.  The CSV contract: ``errors.csv`` has one row per ``N``, columns ``N``,
+``h``, then one column per norm of the scene; ``eoc.csv`` the same columns, one row per ``N``
+after the first and a final ``regression`` row.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz
+
+if TYPE_CHECKING:
+    import pandas as pd
+    import scipy.sparse as sp
+
+
+def load_system(path: str | os.PathLike, N: int | None = None) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
+    """``(A, b, constrained nodes)`` from a ``discretise`` archive (checked against ``N`` if given)."""
+    import scipy.sparse as sp
+
+    d = load_npz(path)
+    if N is not None and int(d["N"]) != int(N):
+        raise CorruptArtifactError(f"{path}: holds the system of N={int(d['N'])}, not N={N}")
+    A = sp.csr_matrix((d["data"], d["indices"], d["indptr"]), shape=tuple(int(s) for s in d["shape"]))
+    return A, d["b"], d["boundary"]
+
+
+def load_solution(solution_npz: str | os.PathLike, N: int, diagonal: str) -> np.ndarray:
+    """``u_h`` from a solve artifact, checked against the mesh it is used on.
+
+    Raises ``CorruptArtifactError`` for a truncated file, a wrong length or another diagonal.
+    """
+    sol = load_npz(solution_npz)
+    u_h = sol["u"]
+    if u_h.shape != ((N + 1) ** 2,):
+        raise CorruptArtifactError(f"{solution_npz}: u has shape {u_h.shape}, expected ({(N + 1) ** 2},) for N={N}")
+    if "diagonal" in sol and str(sol["diagonal"]) != diagonal:
+        raise CorruptArtifactError(f"{solution_npz}: solved with diagonal {sol['diagonal']}, not {diagonal}")
+    return u_h
+
+
+def read_norm(path: str | os.PathLike, norm: str, N: int) -> float:
+    """The value of one norm artifact, checked to hold ``norm`` at ``N``."""
+    art = load_json(path)
+    if art.get("norm") != norm or int(art.get("N", -1)) != int(N):
+        raise CorruptArtifactError(f"{path}: holds {art.get('norm')} at N={art.get('N')}, not {norm} at N={N}")
+    return float(art["value"])
+
+
+def read_errors(scene_N: Sequence[int], norm_jsons: Mapping[str, Sequence[str | os.PathLike]]) -> pd.DataFrame:
+    """A DataFrame with columns ``N``, ``h`` and one column per norm (in the order of ``norm_jsons``),
+    read from the per-norm JSON artifacts; ``norm_jsons[name][k]`` belongs to ``scene_N[k]``."""
+    import pandas as pd
+
+    from signorini.fem.mesh import mesh_width
+
+    Ns = [int(N) for N in scene_N]
+    data: dict[str, list] = {"N": Ns, "h": [mesh_width(N) for N in Ns]}
+    for name, paths in norm_jsons.items():
+        if len(paths) != len(Ns):
+            raise ValueError(f"norm {name}: {len(paths)} artifacts for {len(Ns)} meshes")
+        data[name] = [read_norm(path, name, N) for N, path in zip(Ns, paths, strict=True)]
+    return pd.DataFrame(data)
+
+
+def read_errors_csv(path: str | os.PathLike) -> pd.DataFrame:
+    """``errors.csv`` (or ``eoc.csv``) as a DataFrame; a truncated or malformed file raises
+    ``CorruptArtifactError``."""
+    import pandas as pd
+
+    try:
+        df = pd.read_csv(path, dtype={"N": str})
+    except (OSError, ValueError) as err:
+        raise CorruptArtifactError(f"{path}: unreadable CSV ({err})") from err
+    if list(df.columns[:2]) != ["N", "h"] or df.empty:
+        raise CorruptArtifactError(f"{path}: expected columns N, h, <norms>, got {list(df.columns)}")
+    return df

@@ -1,0 +1,202 @@
+"""Figures of the work-precision study, drawn on a given figure (or a new one) and returned;
+the stage ``work_precision_figures`` saves them."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+
+import numpy as np
+
+from signorini.paper import PAPER_NORMS, label_tex
+from signorini.plotting import new_figure, save
+from signorini.studies.work_precision.study import FIGURE_NORMS
+from signorini.studies.work_precision.table import tolerance_order
+
+TOL_MARKERS = {"exact": "P", "default": "*", "1e-02": "o", "1e-04": "s", "1e-06": "^", "1e-08": "D", "1e-10": "v"}
+
+
+def _marker(label: str) -> str:
+    return TOL_MARKERS.get(label, "h")
+
+
+def _run_points(ax, sub, config: str, order, color, norm: str, floor: float) -> None:
+    """One configuration's runs on one panel: a marker per tolerance, a line through the sweep."""
+    from matplotlib.transforms import blended_transform_factory
+
+    top = blended_transform_factory(ax.transData, ax.transAxes)
+    runs = [sub[(sub["config"] == c) & (sub["tol_label"] == lab)] for c, lab in order if c == config]
+    line_x, line_y = [], []
+    for r in (r.iloc[0] for r in runs if not r.empty):
+        t, e, status = float(r["time_s"]), float(r[f"alg_{norm}"]), str(r["status"])
+        marker = _marker(str(r["tol_label"]))
+        if status == "failed" and np.isfinite(t):
+            ax.plot([t], [0.96], marker="x", color=color, markersize=7, transform=top, clip_on=False)
+            continue
+        if not (np.isfinite(t) and np.isfinite(e)):
+            continue
+        y = max(e, floor)
+        face = "white" if status == "inaccurate" else color
+        size = 9 if marker == "*" else 6
+        ax.plot(
+            [t],
+            [y],
+            marker=marker,
+            color=color,
+            markerfacecolor=face,
+            markersize=size,
+            linestyle="none",
+            clip_on=False,
+            zorder=3,
+        )
+        if r["tol_label"] != "default":
+            line_x.append(t)
+            line_y.append(y)
+    if len(line_x) > 1:
+        ax.plot(line_x, line_y, color=color, linewidth=0.9, alpha=0.7, zorder=2)
+
+
+def _legend_handles(df, configs, colors, order) -> list:
+    from matplotlib.lines import Line2D
+
+    handles = [
+        Line2D([], [], color=colors[c], marker="o", label=str(df.loc[df["config"] == c, "label"].iloc[0]))
+        for c in configs
+    ]
+    names = {"exact": "exact (active set)", "default": "solver default"}
+    handles += [
+        Line2D([], [], color="0.3", marker=_marker(lab), linestyle="none", label=names.get(lab, f"tol {lab}"))
+        for lab in dict.fromkeys(lab for _, lab in order)
+    ]
+    return handles + [
+        Line2D([], [], color="0.3", marker="o", markerfacecolor="white", linestyle="none", label="inaccurate"),
+        Line2D([], [], color="0.3", marker="x", linestyle="none", label="failed (at top)"),
+        Line2D([], [], color="k", linewidth=1.2, label="discretisation error"),
+        Line2D([], [], color="k", linewidth=0.8, linestyle=":", label=r"$10^{-4}\times$ discr. error"),
+        Line2D([], [], color="none", label="error 0: bottom edge"),
+    ]
+
+
+def work_precision_figure(df, figure_N: Sequence[int] = (), fig=None):
+    """Algebraic error ``‖u_h^solver − u_h^exact‖`` (rows: ``L⁴``, ``W^{1,4}``) against solve time,
+    log-log, one panel column per ``N`` of ``figure_N`` (default: coarsest, middle, finest).
+
+    One colour and line per solver configuration (its tolerances loose to tight), one marker
+    per tolerance (star: the solver's default); hollow markers: inaccurate (KKT residual above
+    the tolerance); ×: failed, drawn at the top at the time of failure.  The discretisation
+    error of the mesh is the solid horizontal line, 10⁻⁴ of it (Table 1's fifth digit) the
+    dotted one; an algebraic error of exactly 0 (the pipeline's own solve) sits on the bottom edge.
+    ``df``: the rows of ``work_precision.csv``.  Returns the figure.
+    """
+    import matplotlib
+    from matplotlib.ticker import NullFormatter
+
+    Ns = sorted(int(N) for N in df["N"].unique())
+    cols = [int(N) for N in figure_N if int(N) in Ns] or sorted({Ns[0], Ns[len(Ns) // 2], Ns[-1]})
+    configs = list(dict.fromkeys(df["config"]))
+    fig = fig if fig is not None else new_figure(figsize=(4.1 * len(cols), 7.6))
+    cmap = matplotlib.colormaps["tab10"]
+    colors = {c: cmap(k % 10) for k, c in enumerate(configs)}
+    order = tolerance_order(df)
+    axes = fig.subplots(len(FIGURE_NORMS), len(cols), squeeze=False, sharex="col")
+    for i, norm in enumerate(FIGURE_NORMS):
+        alg_all = df[f"alg_{norm}"].to_numpy(dtype=float)
+        positive = alg_all[np.isfinite(alg_all) & (alg_all > 0)]
+        disc_min = float(df[f"disc_{norm}"].min())
+        floor = min(float(positive.min()) if positive.size else disc_min, 1e-4 * disc_min) / 10.0
+        for j, N in enumerate(cols):
+            ax, sub = axes[i, j], df[df["N"] == N]
+            disc = float(sub[f"disc_{norm}"].iloc[0])
+            ax.axhline(disc, color="k", linewidth=1.2, zorder=1)
+            ax.axhline(1e-4 * disc, color="k", linewidth=0.8, linestyle=":", zorder=1)
+            for config in configs:
+                _run_points(ax, sub, config, order, colors[config], norm, floor)
+            ax.set_xscale("log")
+            ax.set_yscale("log")
+            ax.xaxis.set_minor_formatter(NullFormatter())
+            ax.set_ylim(floor / 1.5, None)
+            ax.grid(True, which="major", linewidth=0.3, alpha=0.6)
+            if i == 0:
+                ax.set_title(f"$h = 1/{N}$")
+            if i == len(FIGURE_NORMS) - 1:
+                ax.set_xlabel("solve time [s]")
+            if j == 0:
+                ax.set_ylabel(f"algebraic error in {label_tex(norm, domain=False)}")
+    fig.legend(
+        handles=_legend_handles(df, configs, colors, order), loc="lower center", ncol=6, fontsize=8, frameon=False
+    )
+    fig.suptitle(r"Work precision: $\|u_h^{\mathrm{solver}} - u_h^{\mathrm{exact}}\|$ against solve time")
+    fig.tight_layout(rect=(0, 0.13, 1, 0.97))
+    return fig
+
+
+def _exact_runs(df):
+    """The first exact configuration's rows (the pipeline's solver), sorted by N, and all exact rows."""
+    exact = df[df["tol_label"] == "exact"]
+    first = exact["config"].iloc[0]
+    return exact[exact["config"] == first].sort_values("N"), exact
+
+
+def cost_panel(df, ax=None):
+    """Total error ``‖u − u_h‖`` of the exact solver in every norm of the paper against total run
+    time (assembly + solve) over the mesh sequence, log-log, with the fitted slope per norm."""
+    ax = ax if ax is not None else new_figure(figsize=(5.5, 4.6)).subplots()
+    ex, _ = _exact_runs(df)
+    total = (ex["build_s"] + ex["time_s"]).to_numpy(dtype=float)
+    norms = [n for n in PAPER_NORMS if f"total_{n}" in ex.columns]
+    for norm in norms:
+        e = ex[f"total_{norm}"].to_numpy(dtype=float)
+        slope = np.polyfit(np.log(total), np.log(e), 1)[0] if len(e) > 1 else float("nan")
+        ax.loglog(total, e, marker="o", markersize=4, label=f"{label_tex(norm, domain=False)} (slope {slope:.2f})")
+    e_all = ex[[f"total_{n}" for n in norms]]
+    for t, e, N in zip(total, e_all.max(axis=1).to_numpy(dtype=float), ex["N"], strict=True):
+        ax.annotate(f"1/{N}", (t, e), textcoords="offset points", xytext=(0, 6), ha="left", fontsize=8, rotation=40)
+    values = e_all.to_numpy(dtype=float)
+    ax.set_ylim(np.nanmin(values) / 300.0, np.nanmax(values) * 4.0)  # room for the legend and the labels
+    ax.set_xlabel("total run time: assembly + solve [s]")
+    ax.set_ylabel(r"total error $\|u - u_h\|$")
+    ax.set_title(f"Cost of accuracy: {ex['label'].iloc[0]}")
+    ax.grid(True, which="major", linewidth=0.3, alpha=0.6)
+    ax.legend(fontsize=8, loc="lower left", ncol=2)
+    return ax
+
+
+def time_panel(df, ax=None):
+    """Where the time goes: assembly and every exact solver configuration against the unknowns."""
+    ax = ax if ax is not None else new_figure(figsize=(5.5, 4.6)).subplots()
+    ex, exact = _exact_runs(df)
+    n = ex["n_dofs"].to_numpy(dtype=float)
+    ax.loglog(n, ex["build_s"], marker="s", color="0.3", label="assembly (mesh, A, b)")
+    for config in dict.fromkeys(exact["config"]):
+        sub = exact[exact["config"] == config].sort_values("N")
+        ax.loglog(sub["n_dofs"], sub["time_s"], marker="o", label=f"solve: {sub['label'].iloc[0]}")
+    ax.loglog(n, float(ex["build_s"].iloc[0]) * n / n[0], linestyle="--", color="0.6", label=r"$\propto$ unknowns")
+    ax.set_xlabel("unknowns $(N+1)^2$")
+    ax.set_ylabel("wall time [s]")
+    ax.set_title("Where the time goes")
+    ax.grid(True, which="major", linewidth=0.3, alpha=0.6)
+    ax.legend(fontsize=8, loc="upper left")
+    return ax
+
+
+def cost_of_accuracy(df, fig=None):
+    """``cost_panel`` (left) and ``time_panel`` (right) side by side.  ``df``: ``work_precision.csv``."""
+    from matplotlib.ticker import NullFormatter
+
+    fig = fig if fig is not None else new_figure(figsize=(11.0, 4.6))
+    ax, ax2 = fig.subplots(1, 2)
+    cost_panel(df, ax)
+    time_panel(df, ax2)
+    for a in (ax, ax2):
+        a.xaxis.set_minor_formatter(NullFormatter())
+    fig.tight_layout()
+    return fig
+
+
+def figures_stage(csv_path: str | os.PathLike, figure_N: Sequence[int], outs) -> None:
+    """Stage ``work_precision_figures`` (``outs``: ``pdf``, ``png``, ``cost_pdf``, ``cost_png``)."""
+    from signorini.studies.work_precision.table import read_measurements
+
+    df = read_measurements(csv_path)
+    save(work_precision_figure(df, figure_N), outs["pdf"], outs["png"])
+    save(cost_of_accuracy(df), outs["cost_pdf"], outs["cost_png"])

@@ -1,0 +1,250 @@
+"""Findings of the work-precision study: what ``work_precision.md`` states, in numbers.
+
+Computed from the measurement table (``work_precision.csv``): how many Table 1 cells each
+(solver, tolerance) changes in their printed 5 significant digits, the tolerance each solver
+needs so that none changes, the fastest run per mesh that keeps them, the ``L⁴`` EOCs of the
+inexact solutions against the published Table 2 column, the published ``L⁴`` cells each run
+comes closest to, and the exact solver's cost per digit.  ``report`` renders them.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from signorini.formatting import sci_md
+from signorini.studies.work_precision.study import EXACT_LABEL
+from signorini.studies.work_precision.table import tolerance_order
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+
+def printed(x: float) -> str:
+    """A cell of Table 1 as printed (5 significant digits, ``formatting.sci_md``)."""
+    return sci_md(x) if np.isfinite(x) else "—"
+
+
+def _runs(df: pd.DataFrame, config: str, label: str) -> pd.DataFrame:
+    """The rows of one (configuration, tolerance) indexed by N."""
+    return df[(df["config"] == config) & (df["tol_label"] == label)].set_index("N")
+
+
+def _unchanged(row: pd.Series, norms: Sequence[str]) -> bool | None:
+    """Whether the run's total errors print like the exact ones in every Table 1 column
+    (None: the run has no answer)."""
+    if not norms or not np.isfinite(float(row[f"total_{norms[0]}"])):
+        return None
+    return all(printed(float(row[f"total_{n}"])) == printed(float(row[f"disc_{n}"])) for n in norms)
+
+
+def _cell_changes(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> list[dict]:
+    """Per (config, tolerance): Table 1 cells printed differently, worst relative change, statuses."""
+    cells = []
+    for config, label in tolerance_order(df):
+        sub = _runs(df, config, label)
+        changed, worst, answered = 0, 0.0, True
+        for N in Ns:
+            row = sub.loc[N] if N in sub.index else None
+            if row is None or _unchanged(row, t1) is None:
+                answered = False
+                continue
+            for n in t1:
+                ours, ref = float(row[f"total_{n}"]), float(row[f"disc_{n}"])
+                changed += printed(ours) != printed(ref)
+                worst = max(worst, abs(ours / ref - 1.0))
+        last = sub.loc[Ns[-1]] if Ns[-1] in sub.index else None
+        cells.append(
+            {
+                "config": config,
+                "label": str(sub.iloc[0]["label"]),
+                "tol_label": label,
+                "exact": label == EXACT_LABEL,
+                "answered": answered,
+                "changed": changed,
+                "n_cells": len(t1) * len(Ns),
+                "worst_rel_change": worst,
+                "statuses": [str(sub.loc[N, "status"]) if N in sub.index else "—" for N in Ns],
+                "time_last": float(last["time_s"]) if last is not None else math.nan,
+                "alg_L4_rel_last": (
+                    float(last["alg_L4"] / last["disc_L4"]) if last is not None and "alg_L4" in sub else math.nan
+                ),
+            }
+        )
+    return cells
+
+
+def _needed(cells: Sequence[Mapping]) -> dict[str, str | None]:
+    """Per QP config, the loosest swept tolerance from which every tighter one keeps Table 1."""
+    needed: dict[str, str | None] = {}
+    for config in dict.fromkeys(c["config"] for c in cells if not c["exact"]):
+        sweep = [c for c in cells if c["config"] == config and c["tol_label"] != "default"]
+        sweep.sort(key=lambda c: float(c["tol_label"]))  # tight to loose
+        best = None
+        for c in sweep:
+            if not (c["answered"] and c["changed"] == 0):
+                break
+            best = c["tol_label"]
+        needed[config] = best
+    return needed
+
+
+def _cheapest(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> dict[int, dict[str, dict]]:
+    """Per N and config, the fastest run that leaves Table 1's row of that N unchanged."""
+    cheapest: dict[int, dict[str, dict]] = {}
+    for N in Ns:
+        cheapest[N] = {}
+        for config in dict.fromkeys(df["config"]):
+            rows = df[(df["config"] == config) & (df["N"] == N)]
+            good = [r for _, r in rows.iterrows() if _unchanged(r, t1)]
+            if good:
+                fastest = min(good, key=lambda r: float(r["time_s"]))
+                cheapest[N][config] = {"tol_label": str(fastest["tol_label"]), "time_s": float(fastest["time_s"])}
+    return cheapest
+
+
+def _l4_eocs(
+    df: pd.DataFrame, Ns: Sequence[int], paper_rates: Sequence[float] | None, paper_l4: Mapping[int, float] | None
+) -> list[dict]:
+    """Per (config, tolerance) with an answer on every mesh: the ``L⁴`` EOCs and their largest
+    deviations from the published and from the exact EOCs."""
+    from signorini.fem.convergence import eoc
+
+    h = np.array([1.0 / N for N in Ns])
+    eocs, exact_eoc = [], None
+    for config, label in tolerance_order(df):
+        sub = _runs(df, config, label)
+        if "total_L4" not in sub.columns or len(Ns) < 2 or any(N not in sub.index for N in Ns):
+            continue
+        e = np.array([float(sub.loc[N, "total_L4"]) for N in Ns])
+        if not np.all(np.isfinite(e)):
+            continue
+        rates = eoc(h, e)[1:]
+        entry = {"config": config, "label": str(sub.iloc[0]["label"]), "tol_label": label, "eoc": rates.tolist()}
+        entry["max_dev_paper"] = (
+            float(np.nanmax(np.abs(rates - np.asarray(paper_rates))))
+            if paper_rates and np.isfinite(paper_rates).any()
+            else math.nan
+        )
+        if paper_l4:
+            entry["l4_dev_paper"] = [
+                float(e[k] / paper_l4[N] - 1.0) if N in paper_l4 else math.nan for k, N in enumerate(Ns)
+            ]
+        if label == EXACT_LABEL and exact_eoc is None:
+            exact_eoc = rates
+        eocs.append(entry)
+    for entry in eocs:
+        entry["max_dev_exact"] = (
+            float(np.max(np.abs(np.asarray(entry["eoc"]) - exact_eoc))) if exact_eoc is not None else math.nan
+        )
+    return eocs
+
+
+def _exact_cost(df: pd.DataFrame, Ns: Sequence[int]) -> dict[str, Any]:
+    """The exact solver's times and total errors per N, and the slope of error against time."""
+    exact_rows = df[df["tol_label"] == EXACT_LABEL]
+    if exact_rows.empty:
+        return {}
+    first = exact_rows["config"].iloc[0]
+    ex = exact_rows[exact_rows["config"] == first].set_index("N")
+    ex = ex.loc[[N for N in Ns if N in ex.index]]
+    total_time = (ex["build_s"] + ex["time_s"]).to_numpy(dtype=float)
+    exact = {
+        "config": first,
+        "label": str(ex["label"].iloc[0]),
+        "N": ex.index.tolist(),
+        "build_s": ex["build_s"].tolist(),
+        "time_s": ex["time_s"].tolist(),
+        "total_time_s": total_time.tolist(),
+    }
+    for n in ("L4", "W14"):
+        if f"total_{n}" in ex.columns and len(ex) >= 2:
+            err = ex[f"total_{n}"].to_numpy(dtype=float)
+            slope = float(np.polyfit(np.log10(total_time), np.log10(err), 1)[0])
+            exact[f"total_{n}"] = err.tolist()
+            exact[f"slope_{n}"] = slope
+            exact[f"time_factor_per_digit_{n}"] = 10.0 ** (-1.0 / slope) if slope < 0 else math.inf
+    return exact
+
+
+def _closest_l4(df: pd.DataFrame, paper_l4: Mapping[int, float] | None) -> dict[int, dict]:
+    """Per N with a published ``L⁴`` cell, the run whose total ``L⁴`` error is closest to it."""
+    closest: dict[int, dict] = {}
+    for N, published in (paper_l4 or {}).items() if "total_L4" in df.columns else ():
+        rows = df[(df["N"] == N) & np.isfinite(df["total_L4"])]
+        if rows.empty:
+            continue
+        dev = (rows["total_L4"] / published - 1.0).to_numpy(dtype=float)
+        k = int(np.argmin(np.abs(dev)))
+        exact_rows = rows[rows["tol_label"] == EXACT_LABEL]
+        closest[int(N)] = {
+            "paper": float(published),
+            "label": str(rows["label"].iloc[k]),
+            "tol_label": str(rows["tol_label"].iloc[k]),
+            "status": str(rows["status"].iloc[k]),
+            "value": float(rows["total_L4"].iloc[k]),
+            "dev": float(dev[k]),
+            "exact_dev": float(exact_rows["total_L4"].iloc[0] / published - 1.0) if len(exact_rows) else math.nan,
+        }
+    return closest
+
+
+def _machine(df: pd.DataFrame) -> dict[str, Any]:
+    """Load average at the measurements, wall-clock span of the jobs, their summed time, status counts."""
+    load = df[df["status"] != "skipped"]["load1"].to_numpy(dtype=float)
+    ends = (df["job_started"] + df["job_wall_s"]).to_numpy(dtype=float)
+    return {
+        "load": {"min": float(np.min(load)), "median": float(np.median(load)), "max": float(np.max(load))}
+        if load.size
+        else {},
+        "span_s": float(np.nanmax(ends) - np.nanmin(df["job_started"])) if len(df) else math.nan,
+        "job_time_s": float(df.drop_duplicates(["N", "config"])["job_wall_s"].sum()),
+        "counts": df["status"].value_counts().to_dict(),
+    }
+
+
+def findings(
+    df: pd.DataFrame,
+    table1_norms: Sequence[str],
+    paper_l4: Mapping[int, float] | None = None,
+    paper_l4_eoc: Mapping[int, float] | None = None,
+) -> dict:
+    """The numbers ``work_precision.md`` states, computed from the measurement table.
+
+    - ``cells``: per (config, tolerance), how many Table 1 cells (``table1_norms`` × N) print
+      differently (5 significant digits) from the exact solution's, the worst relative change
+      of a total error, the statuses per N (``answered``: an answer at every N).
+    - ``needed``: per QP config, the loosest swept tolerance from which every tighter swept
+      tolerance leaves all Table 1 cells unchanged at every N (None: none does).
+    - ``cheapest``: per N and config, the fastest run that leaves Table 1's row of that N
+      unchanged (its tolerance and time).
+    - ``eoc``: per (config, tolerance) with an answer at every N, the ``L⁴`` EOCs of the total
+      error, and the largest deviation from the published (``paper_l4_eoc``: N → EOC) and from
+      the exact EOCs; ``paper_l4`` (N → published L⁴ error) gives the relative deviation of the
+      ``L⁴`` errors themselves.
+    - ``exact``: the exact solver's times and errors per N, and the log-log slope of the
+      ``L⁴``/``W^{1,4}`` errors against total time (assembly + solve) with the time factor per digit.
+    - ``closest_l4``: per N with a published ``L⁴`` cell, the run whose total ``L⁴`` error is
+      closest to it (relative deviation), next to the exact solution's deviation.
+    - ``load``/``span_s``/``job_time_s``/``counts``: the load average at the measurements, the
+      wall-clock span of the measurement jobs, their summed run time and the status counts.
+    """
+    Ns = sorted(int(N) for N in df["N"].unique())
+    t1 = [n for n in table1_norms if f"total_{n}" in df.columns]
+    cells = _cell_changes(df, Ns, t1)
+    paper_rates = [paper_l4_eoc.get(N, math.nan) for N in Ns[1:]] if paper_l4_eoc else None
+    return {
+        "N": Ns,
+        "table1_norms": t1,
+        "cells": cells,
+        "needed": _needed(cells),
+        "cheapest": _cheapest(df, Ns, t1),
+        "eoc": _l4_eocs(df, Ns, paper_rates, paper_l4),
+        "paper_l4_eoc": paper_rates,
+        "exact": _exact_cost(df, Ns),
+        "closest_l4": _closest_l4(df, paper_l4),
+        **_machine(df),
+    }

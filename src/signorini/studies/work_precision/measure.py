@@ -1,0 +1,387 @@
+"""Work-precision study: error against run time of every solver on the paper's problem.
+
+What is measured, per mesh ``N`` and per *solver configuration* (``study_configs``):
+
+- ``time_s``: wall time (``time.perf_counter``) of one call of the solver on the assembled
+  system, best of 3 when the first call takes under ``REPEAT_BELOW_S`` = 1 s.  For the
+  active-set solver the call is ``solve_discrete`` (a cascade warm start includes building
+  and solving the coarse levels); for cvxpy it is ``cvxpy_solve`` (cvxpy's canonicalisation
+  included; the QP solver's own time is ``solver_time_s``).  Assembly of the level-``N``
+  system is common to all configurations and timed once (``build_s``, the ``discretise`` stage).
+- ``iterations`` (Newton steps of the active-set method, iterations of the QP solver) and
+  the relative KKT residuals of ``signorini.solvers.certificate`` (computed with the check
+  disabled, so an inaccurate answer is recorded, not raised).
+- ``status``: ``ok`` (optimal, worst KKT residual ≤ the requested tolerance), ``inaccurate``
+  (residual above it, or the solver's own status ``optimal_inaccurate``), ``failed`` (with
+  the reason: solver error, time limit, iteration limit, …) or ``skipped`` (predicted to
+  fail or to exceed the time limit from the same configuration on the previous mesh).
+  A failure never raises: the exception is recorded.
+- ``alg_<norm>``: the *algebraic error* ``‖u_h^solver − u_h^exact‖`` against the certified
+  exact discrete solution of the source scene, in exact norms of a P1 function (``p1_norms``).
+- ``total_<norm>``: the *total error* ``‖u − u_h^solver‖`` with the pipeline's conventions
+  (``signorini.fem.norms.evaluate_norms``), and ``disc_<norm>``: the discretisation error
+  ``‖u − u_h^exact‖`` read from the source scene's norm artifacts.
+
+The study reuses the source scene's assembled systems, exact solutions and norm artifacts
+(``results/<source>/N<N>/system.npz``, ``solution.npz``, ``norms/*.json``).  This module is the
+stage ``work_precision_measure``; ``table`` gathers the records into ``work_precision.csv``,
+``findings`` and ``report`` turn it into ``work_precision.md``, ``figures`` into the figures.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import hashlib
+import logging
+import math
+import os
+import re
+import tempfile
+import time
+from collections.abc import Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from signorini.fem.p1norms import p1_norms
+from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz, save_json
+from signorini.studies.scene.store import load_system, read_norm
+from signorini.studies.work_precision.study import EXACT_LABEL, GROWTH_EXPONENT, SolverConfig
+
+log = logging.getLogger(__name__)
+
+REPEAT_BELOW_S = 1.0  # a solve faster than this is repeated, best of 3
+REPEATS = 3
+# cvxpy solver option that limits the wall time of one solve (seconds)
+TIME_LIMIT_OPTIONS = {
+    "CLARABEL": "time_limit",
+    "OSQP": "time_limit",
+    "SCS": "time_limit_secs",
+    "HIGHS": "time_limit",
+    "PIQP": "max_time",
+    "PROXQP": "max_time",  # hypothetical mapping for solvers not installed here
+}
+LOG_FILE_OPTIONS = {"HIGHS": "log_file"}  # solvers whose log can go to a file (failure reasons)
+
+
+@dataclass
+class Attempt:
+    """The outcome of one solver call: result (or None), status, reason and timings."""
+
+    result: Any
+    status: str
+    reason: str
+    times: list[float]
+
+
+@contextlib.contextmanager
+def _solver_log(solver: str) -> Iterator[tuple[dict, Path | None]]:
+    """Solver options that send the solver's log to a temporary file (HiGHS), and the file."""
+    option = LOG_FILE_OPTIONS.get(solver)
+    if option is None:
+        yield {}, None
+        return
+    with tempfile.TemporaryDirectory(prefix="wp-log-") as tmp:
+        path = Path(tmp) / "solver.log"
+        yield {option: str(path)}, path
+
+
+def _log_reason(path: Path | None) -> str:
+    """The status lines of a solver log (e.g. HiGHS' ``Model status : Solve error`` and its ERROR line)."""
+    if path is None or not path.exists():
+        return ""
+    keep = [
+        " ".join(line.split())
+        for line in path.read_text(errors="replace").splitlines()
+        if re.search(r"error|model status", line, re.IGNORECASE)
+    ]
+    return "; ".join(dict.fromkeys(keep))[:300]
+
+
+def classify_failure(err: BaseException, elapsed: float, time_limit_s: float | None) -> tuple[str, str]:
+    """(status, reason) of a solver call that raised ``err`` after ``elapsed`` seconds."""
+    message = " ".join(str(err).split())
+    status = re.search(r"returned status '(\w+)'", message)
+    if status and status[1] == "optimal_inaccurate":
+        return "inaccurate", "solver status optimal_inaccurate (cvxpy_solve returns no solution for it)"
+    if time_limit_s is not None and elapsed >= 0.9 * time_limit_s:
+        return "failed", f"time limit ({time_limit_s:g} s)"
+    if status and status[1] == "user_limit":
+        return "failed", "iteration limit (status user_limit)"
+    if status:
+        return "failed", f"solver status {status[1]}"
+    return "failed", f"{type(err).__name__}: {message[:240]}"
+
+
+def run_solver(
+    config: SolverConfig,
+    disc,
+    tol: float | None,
+    time_limit_s: float | None = None,
+    repeat_below_s: float = REPEAT_BELOW_S,
+    repeats: int = REPEATS,
+) -> Attempt:
+    """Solve ``disc`` (a ``DiscreteProblem``) with ``config`` at tolerance ``tol`` (None: the
+    solver's default; ignored by the active-set solver); never raises.
+
+    Timing: wall time of the call; repeated (best of ``repeats``) when the first call takes
+    less than ``repeat_below_s``.  The status compares the worst relative KKT residual with
+    ``tol`` (or the solver's default tolerance, or the active-set certificate's 1e-10).
+    """
+    from signorini.fem.solve import solve_discrete
+    from signorini.solvers import cvxpy_solve
+    from signorini.solvers.cvxpy_qp import TOLERANCE_OPTIONS
+
+    options = dict(config.options)
+    limit = None if config.exact else time_limit_s
+    if config.exact:
+        warm = options.pop("warm_start", "cascade")
+        required = float(options.get("kkt_tol", 1e-10))
+    else:
+        if limit is not None and config.solver in TIME_LIMIT_OPTIONS:
+            options.setdefault(TIME_LIMIT_OPTIONS[config.solver], float(limit))
+        default = TOLERANCE_OPTIONS.get(config.solver, ((), math.nan))[1]
+        required = float(tol) if tol is not None else float(default)
+
+    def call():
+        if config.exact:
+            return solve_discrete(disc, "active_set", warm_start=warm, **options)
+        return cvxpy_solve(disc.A, disc.b, disc.boundary, config.solver, tol=tol, check=False, **options)
+
+    times: list[float] = []
+    result = None
+    with _solver_log(config.solver) as (log_options, log_path):
+        options.update(log_options)
+        for k in range(repeats):
+            t0 = time.perf_counter()
+            try:
+                result = call()
+            except Exception as err:  # a failing solver is recorded, never raised
+                elapsed = time.perf_counter() - t0
+                status, reason = classify_failure(err, elapsed, limit)
+                detail = _log_reason(log_path)
+                if detail and "time limit" not in reason:  # the solver's own words instead of cvxpy's
+                    reason = f"{reason.split(':')[0]}: {detail}"
+                log.info("%s tol=%s: %s (%s) after %.2f s", config.name, tol, status, reason, elapsed)
+                return Attempt(None, status, reason, [*times, elapsed])
+            times.append(time.perf_counter() - t0)
+            if k == 0 and times[0] >= repeat_below_s:
+                break
+    worst = result.certificate.worst
+    if not np.isfinite(worst) or worst > required:
+        return Attempt(result, "inaccurate", f"KKT residual {worst:.1e} > tolerance {required:.0e}", times)
+    return Attempt(result, "ok", "", times)
+
+
+def _warm_up(config: SolverConfig) -> None:
+    """Load the solver's libraries with a 3-unknown QP, so the first timed call pays no import."""
+    if config.exact:
+        return
+    import scipy.sparse as sp
+
+    from signorini.solvers import cvxpy_solve
+
+    with contextlib.suppress(Exception):
+        A = sp.identity(3, format="csr") * 2.0
+        cvxpy_solve(A, np.array([1.0, -1.0, 1.0]), np.array([0, 1]), config.solver, check=False, **config.options)
+
+
+def tolerance_label(tol: float | None, config: SolverConfig) -> str:
+    """``exact`` (active set), ``default`` (solver default) or the tolerance as ``1e-06``."""
+    if config.exact:
+        return EXACT_LABEL
+    return "default" if tol is None else f"{tol:.0e}"
+
+
+def planned_runs(config: SolverConfig, tolerances: Sequence[float]) -> list[float | None]:
+    """The active set once; a QP solver at its default tolerance (None), then loose to tight."""
+    if config.exact:
+        return [None]
+    return [None, *sorted({float(t) for t in tolerances}, reverse=True)]
+
+
+def skip_reason(
+    prev: Mapping | None, n: int, time_limit_s: float | None, exponent: float = GROWTH_EXPONENT
+) -> str | None:
+    """Why a run is skipped, judged from the same configuration and tolerance on the previous
+    mesh (``prev``, a record): it was skipped or failed there, or its time scaled by
+    ``(n / n_prev)^exponent`` exceeds ``time_limit_s``.  None: run it."""
+    if prev is None:
+        return None
+    where = f"N={prev['N']}"
+    if prev["status"] == "skipped":
+        return str(prev["reason"]) if "at N=" in str(prev["reason"]) else f"{prev['reason']} at {where}"
+    if prev["status"] == "failed":
+        if str(prev["reason"]).startswith("time limit"):
+            return f"time budget ({prev['reason']} hit at {where})"
+        return f"failed at {where}: {prev['reason']}"
+    if time_limit_s is None:
+        return None
+    predicted = float(prev["time_s"]) * (n / int(prev["n_dofs"])) ** exponent
+    if predicted > time_limit_s:
+        was = float(prev["time_s"])
+        return f"time budget (predicted {predicted:.0f} s > {time_limit_s:g} s from {was:.1f} s at {where})"
+    return None
+
+
+def _fingerprint(u: np.ndarray) -> str:
+    return hashlib.sha256(np.ascontiguousarray(u).tobytes()).hexdigest()
+
+
+@dataclass
+class _Inputs:
+    """What every run of one job shares: the system, the exact solution, the discretisation errors."""
+
+    disc: Any  # fem.discrete.DiscreteProblem
+    exact: np.ndarray
+    disc_err: dict[str, float]
+    build_s: float
+    prev: dict[str, dict]
+    conventions: Any  # fem.norms.Conventions
+
+
+def _load_inputs(
+    problem_params: Mapping,
+    N: int,
+    diagonal: str,
+    system_npz: str | os.PathLike,
+    system_json: str | os.PathLike,
+    exact_npz: str | os.PathLike,
+    disc_norm_jsons: Mapping[str, str | os.PathLike],
+    prev_json: str | os.PathLike | None,
+    conventions: Mapping | None,
+) -> _Inputs:
+    from signorini.fem.discrete import DiscreteProblem
+    from signorini.fem.mesh import friedrichs_keller
+    from signorini.fem.norms import Conventions
+    from signorini.fem.problem import Problem
+
+    disc_err = {name: read_norm(path, name, N) for name, path in disc_norm_jsons.items()}
+    A, b, boundary = load_system(system_npz, N)
+    mesh = friedrichs_keller(int(N), diagonal)
+    disc = DiscreteProblem(Problem.from_params(problem_params), int(N), diagonal, mesh, A, b, boundary)
+    exact = load_npz(exact_npz)["u"]
+    if exact.shape != b.shape:
+        raise CorruptArtifactError(f"{exact_npz}: u has shape {exact.shape}, expected {b.shape} for N={N}")
+    prev = {r["tol_label"]: r for r in load_json(prev_json)["records"]} if prev_json else {}
+    build_s = float(load_json(system_json)["timings"]["build_s"])
+    return _Inputs(disc, exact, disc_err, build_s, prev, Conventions(**dict(conventions or {})))
+
+
+def _base_record(inp: _Inputs, config: SolverConfig, tol: float | None) -> dict[str, Any]:
+    from signorini.fem.mesh import mesh_width
+
+    N = inp.disc.N
+    return {
+        "N": N,
+        "h": mesh_width(N),
+        "n_dofs": int(inp.disc.b.size),
+        "config": config.name,
+        "solver": config.solver,
+        "label": config.label,
+        "tol": math.nan if tol is None else float(tol),
+        "tol_label": tolerance_label(tol, config),
+        "is_default": tol is None and not config.exact,
+        "load1": os.getloadavg()[0],
+        "build_s": inp.build_s,
+    }
+
+
+def _measure(inp: _Inputs, config: SolverConfig, tol: float | None, time_limit: float | None, norm_cache: dict) -> dict:
+    """Run one (configuration, tolerance) and record its status, times, residuals and errors."""
+    from signorini.fem.norms import evaluate_norms
+
+    names = list(inp.disc_err)
+    attempt = run_solver(config, inp.disc, tol, time_limit)
+    record = {
+        "status": attempt.status,
+        "reason": attempt.reason,
+        "time_s": min(attempt.times) if attempt.result is not None else attempt.times[-1],
+        "time_runs": len(attempt.times),
+        "times": " ".join(f"{t:.6g}" for t in attempt.times),
+    }
+    res = attempt.result
+    if res is not None:
+        record.update(
+            iterations=int(res.iterations),
+            solver_time_s=float(res.summary().get("solve_time_s", math.nan)),
+            n_active=int(res.active.size),
+            **{f"kkt_{k}": float(v) for k, v in res.certificate.as_dict().items() if k not in ("ok", "tol")},
+        )
+        alg = p1_norms(inp.disc.mesh, res.u - inp.exact, names, inp.conventions)
+        key = _fingerprint(res.u)
+        if key not in norm_cache:
+            norm_cache[key] = evaluate_norms(inp.disc.problem, inp.disc.mesh, res.u, names, inp.conventions)
+        record.update({f"alg_{n}": alg[n] for n in names})
+        record.update({f"total_{n}": norm_cache[key][n] for n in names})
+    return record
+
+
+def measure_stage(
+    problem_params: Mapping,
+    N: int,
+    diagonal: str,
+    config: Mapping,
+    tolerances: Sequence[float],
+    time_limit_s: float | None,
+    inputs: Mapping[str, Any],
+    out_json: str | os.PathLike,
+    conventions: Mapping | None = None,
+    growth_exponent: float = GROWTH_EXPONENT,
+) -> dict:
+    """Stage ``work_precision_measure``: run one solver configuration (``SolverConfig.as_dict()``)
+    on mesh ``N`` at its default and at every tolerance of ``tolerances``; save the records (see
+    the module docstring).
+
+    ``inputs``: ``system`` and ``system_json`` (the source scene's ``discretise`` artifacts),
+    ``exact`` (its solution), ``disc`` (its norm artifacts of this ``N``, norm → path: the
+    discretisation errors, which also define the norms measured) and ``prev`` (this
+    configuration's artifact on the previous mesh, or None, for ``skip_reason``).
+    ``time_limit_s`` limits each QP solve (the solver's own option) and drives ``skip_reason``
+    (for every configuration, the active-set ones included).
+    """
+    started, t_job, load_start = time.time(), time.perf_counter(), os.getloadavg()[0]
+    config = SolverConfig(**config)
+    time_limit = float(time_limit_s) if time_limit_s is not None else None
+    inp = _load_inputs(
+        problem_params, N, diagonal, inputs["system"], inputs["system_json"], inputs["exact"], inputs["disc"],
+        inputs.get("prev"), conventions,
+    )
+    _warm_up(config)
+    norm_cache: dict[str, dict[str, float]] = {_fingerprint(inp.exact): inp.disc_err}
+    records = []
+    for tol in planned_runs(config, tolerances):
+        record = _base_record(inp, config, tol)
+        skip = skip_reason(inp.prev.get(record["tol_label"]), record["n_dofs"], time_limit, float(growth_exponent))
+        if skip is not None:
+            record.update(status="skipped", reason=skip, time_s=math.nan, time_runs=0)
+        else:
+            record.update(_measure(inp, config, tol, time_limit, norm_cache))
+        record.update({f"disc_{n}": v for n, v in inp.disc_err.items()})
+        records.append(record)
+        log.info(
+            "N=%d %s %s: %s %s time %.3f s, L4 alg %.2e", N, config.name, record["tol_label"], record["status"],
+            record["reason"], record["time_s"], record.get("alg_L4", math.nan),
+        )
+    wall_s = time.perf_counter() - t_job
+    for r in records:
+        r["job_wall_s"], r["job_started"] = wall_s, started
+    info = {
+        "N": int(N),
+        "config": config.as_dict(),
+        "tolerances": [float(t) for t in tolerances],
+        "time_limit_s": time_limit,
+        "growth_exponent": float(growth_exponent),
+        "records": records,
+        "job": {
+            "started": started,
+            "wall_s": wall_s,
+            "load1_start": load_start,
+            "load1_end": os.getloadavg()[0],
+            "note": "wall_s: perf_counter over the whole stage function (loading, warm-up, solves, norms)",
+        },
+    }
+    save_json(out_json, info)
+    return info

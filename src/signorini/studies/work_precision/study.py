@@ -1,0 +1,96 @@
+"""The work-precision study's configuration: the solver configurations of a scene's ``study``
+block and the checks that the scene may reuse its source scene's artifacts."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+from signorini.fem.mesh import DEFAULT_DIAGONAL
+from signorini.paper import FIGURE3_NORMS
+
+FIGURE_NORMS = FIGURE3_NORMS  # the panel rows of work_precision.{pdf,png}
+EXACT_LABEL = "exact"  # the tolerance label of the exact (active-set) runs
+GROWTH_EXPONENT = 1.5  # predicted time ∝ (number of unknowns)^GROWTH_EXPONENT
+
+
+class StudyConfigError(ValueError):
+    """The ``study`` block of a scene is inconsistent with its source scene."""
+
+
+@dataclass(frozen=True)
+class SolverConfig:
+    """One solver configuration: ``solver`` is ``active_set`` or a cvxpy QP solver (upper case);
+    ``options`` go to ``solve_discrete`` (active set: ``warm_start``, ``backend``, …) or
+    ``cvxpy_solve`` (solver options such as ``polishing``)."""
+
+    name: str
+    solver: str
+    label: str
+    options: dict = field(default_factory=dict)
+
+    @property
+    def exact(self) -> bool:
+        return self.solver == "active_set"
+
+    def as_dict(self) -> dict:
+        return {"name": self.name, "solver": self.solver, "label": self.label, "options": dict(self.options)}
+
+
+def study_configs(study: Mapping, installed: Sequence[str] = ()) -> dict[str, SolverConfig]:
+    """The configurations of a ``study`` block: its ``configs`` (name → ``{solver, label, options}``)
+    plus, with ``qp_solvers: installed`` (the QP solvers ``installed``, e.g.
+    ``signorini.solvers.installed_qp_solvers()``) or a list of names, one configuration per cvxpy
+    QP solver, named by the lower-case solver name, unless a configuration of that name exists."""
+    out: dict[str, SolverConfig] = {}
+    for name, spec in (study.get("configs") or {}).items():
+        solver = str(spec["solver"])
+        solver = solver if solver == "active_set" else solver.upper()
+        out[name] = SolverConfig(name, solver, str(spec.get("label", name)), dict(spec.get("options") or {}))
+    qp = study.get("qp_solvers", [])
+    if qp == "installed":
+        qp = list(installed)
+    for solver in qp:
+        name = solver.lower()
+        if name not in out:
+            out[name] = SolverConfig(name, solver.upper(), solver.upper(), {})
+    for name in out:
+        if not re.fullmatch(r"[a-z0-9_]+", name):
+            raise StudyConfigError(f"configuration name {name!r}: use lower-case letters, digits and _")
+    return out
+
+
+def check_study(scenes: Mapping, name: str) -> None:
+    """The scene ``name`` may reuse its source scene's artifacts: same problem and diagonal,
+    its ``N`` a subset of the source's, its norms among the source's and containing L4, W14."""
+    scene = scenes[name]
+    study = scene.get("study")
+    where = f"scenes.{name}.study"
+    if not study:
+        raise StudyConfigError(f"{where}: missing")
+    source = study.get("source")
+    if source not in scenes:
+        raise StudyConfigError(f"{where}.source: {source!r} is not one of the scenes {sorted(scenes)}")
+    src = scenes[source]
+    if dict(src["problem"]) != dict(scene["problem"]):
+        raise StudyConfigError(f"{where}.source: problem {scene['problem']} differs from {source}'s {src['problem']}")
+    if src.get("diagonal", DEFAULT_DIAGONAL) != scene.get("diagonal", DEFAULT_DIAGONAL):
+        raise StudyConfigError(f"{where}.source: diagonal differs from {source}'s")
+    if src.get("conventions", {}) != scene.get("conventions", {}):
+        raise StudyConfigError(f"{where}.source: conventions differ from {source}'s")
+    missing = [N for N in scene["N"] if N not in src["N"]]
+    if missing:
+        raise StudyConfigError(f"scenes.{name}.N: {missing} not among {source}'s N {src['N']}")
+    if list(scene["N"]) != sorted(scene["N"]):
+        raise StudyConfigError(f"scenes.{name}.N: must be increasing (the time prediction uses the previous N)")
+    norms = [n for n in scene["norms"] if n not in src["norms"]]
+    if norms:
+        raise StudyConfigError(f"scenes.{name}.norms: {norms} not computed by {source}")
+    for n in FIGURE_NORMS:
+        if n not in scene["norms"]:
+            raise StudyConfigError(f"scenes.{name}.norms: the figure needs {n}")
+    for N in study.get("figure_N", []):
+        if N not in scene["N"]:
+            raise StudyConfigError(f"{where}.figure_N: {N} is not one of the scene's N")
+    study_configs(study, installed=[])  # names

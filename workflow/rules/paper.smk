@@ -1,0 +1,121 @@
+# The paper's study, rendered from the scene `figures_scene` (default: paper): Tables 1-2,
+# Figures 2-3, the reproduction report and the run times in paper_figures/.
+
+
+rule sample:
+    """u and f on a grid of the unit square: the data of Figure 2."""
+    input:
+        code=code("sample"),
+    output:
+        npz=PATHS["fields_npz"],
+    log:
+        paths.log("scene", "sample"),
+    conda:
+        "../envs/signorini.yaml"
+    params:
+        problem=scene_param("problem"),
+    script:
+        "../scripts/sample.py"
+
+
+rule table1:
+    """Table 1: the absolute errors (CSV, Markdown, LaTeX)."""
+    input:
+        norms=flat(norm_jsons(FIG, TABLE1_NORMS)),
+        code=code("table1"),
+    output:
+        **FIGURES["table1"],
+    log:
+        paths.log("scene", "table1", scene=FIG),
+    conda:
+        "../envs/signorini.yaml"
+    params:
+        N=scene_of(FIG)["N"],
+        norm_jsons=norm_jsons(FIG, TABLE1_NORMS),
+    script:
+        "../scripts/table1.py"
+
+
+rule table2:
+    """Table 2: the EOCs, the regression slope and the expected orders."""
+    input:
+        eoc=expand(rules.eoc.output.csv, scene=FIG),
+        code=code("table2"),
+    output:
+        **FIGURES["table2"],
+    log:
+        paths.log("scene", "table2", scene=FIG),
+    conda:
+        "../envs/signorini.yaml"
+    params:
+        N=scene_of(FIG)["N"],
+    script:
+        "../scripts/table2.py"
+
+
+rule figure2:
+    """Figure 2: the solution u and the right-hand side f."""
+    input:
+        fields=expand(rules.sample.output.npz, scene=FIG),
+        code=code("figure2"),
+    output:
+        **FIGURES["figure2"],
+    log:
+        paths.log("scene", "figure2", scene=FIG),
+    conda:
+        "../envs/signorini.yaml"
+    script:
+        "../scripts/figure2.py"
+
+
+rule figure3:
+    """Figure 3: the L4 and W14 errors against h with their expected slopes."""
+    input:
+        norms=flat(norm_jsons(FIG, FIGURE3_NORMS)),
+        code=code("figure3"),
+    output:
+        **FIGURES["figure3"],
+    log:
+        paths.log("scene", "figure3", scene=FIG),
+    conda:
+        "../envs/signorini.yaml"
+    params:
+        N=scene_of(FIG)["N"],
+        norm_jsons=norm_jsons(FIG, FIGURE3_NORMS),
+    script:
+        "../scripts/figure3.py"
+
+
+rule reproduction:
+    """Every published cell of Tables 1-2: ours, the paper's, the relative deviation."""
+    input:
+        **paths.REFERENCES,
+        table1=rules.table1.output.csv,
+        table2=rules.table2.output.csv,
+        code=code("reproduction"),
+    output:
+        **FIGURES["reproduction"],
+    log:
+        paths.log("scene", "reproduction", scene=FIG),
+    conda:
+        "../envs/signorini.yaml"
+    script:
+        "../scripts/reproduction.py"
+
+
+rule runtime:
+    """Run times of the rendered scene's discretise, solve and norm jobs."""
+    input:
+        benchmarks=[job["benchmark"] for job in runtime_jobs(FIG)],
+        artifacts=[job["artifact"] for job in runtime_jobs(FIG)],
+        code=code("runtime"),
+    output:
+        **FIGURES["runtime"],
+    log:
+        paths.log("scene", "runtime", scene=FIG),
+    conda:
+        "../envs/signorini.yaml"
+    params:
+        jobs=runtime_jobs(FIG),
+    script:
+        "../scripts/runtime.py"

@@ -1,0 +1,111 @@
+# The chain every scene runs, per scene and N: discretise -> solve -> norm (one job per norm,
+# so a target computes only the norms it needs) -> errors.csv -> eoc.csv.
+
+
+rule discretise:
+    """Mesh and assemble (S_h) of one scene and N: A, b and the constrained nodes."""
+    input:
+        code=code("discretise"),
+    output:
+        npz=PATHS["system_npz"],
+        json=PATHS["system_json"],
+    log:
+        paths.log("mesh", "discretise"),
+    benchmark:
+        paths.benchmark("mesh", "discretise")
+    # the largest meshes first: they are the critical path
+    priority: lambda wc: int(wc.N)
+    conda:
+        "../envs/signorini.yaml"
+    resources:
+        mem_mb=lambda wc: 500 + int(wc.N) ** 2 // 250,
+        runtime=lambda wc: 5 + int(wc.N) ** 2 // 10000,
+    params:
+        problem=scene_param("problem"),
+        diagonal=scene_param("diagonal"),
+    script:
+        "../scripts/discretise.py"
+
+
+rule solve:
+    """Solve (S_h) of one scene and N with the scene's solver, certified by its KKT residuals."""
+    input:
+        system=rules.discretise.output.npz,
+        code=code("solve"),
+    output:
+        npz=PATHS["solution_npz"],
+        json=PATHS["solution_json"],
+    log:
+        paths.log("mesh", "solve"),
+    benchmark:
+        paths.benchmark("mesh", "solve")
+    priority: lambda wc: int(wc.N)
+    conda:
+        "../envs/signorini.yaml"
+    resources:
+        mem_mb=lambda wc: 500 + int(wc.N) ** 2 // 250,
+        runtime=lambda wc: 5 + int(wc.N) ** 2 // 10000,
+    params:
+        problem=scene_param("problem"),
+        diagonal=scene_param("diagonal"),
+        solver=scene_param("solver"),
+        solver_options=scene_param("solver_options"),
+    script:
+        "../scripts/solve.py"
+
+
+rule norm:
+    """One norm of the error u - u_h of one scene and N."""
+    input:
+        solution=rules.solve.output.npz,
+        code=code("norm"),
+    output:
+        json=PATHS["norm_json"],
+    log:
+        paths.log("mesh", "norm_{norm}"),
+    benchmark:
+        paths.benchmark("mesh", "norm_{norm}")
+    conda:
+        "../envs/signorini.yaml"
+    resources:
+        mem_mb=lambda wc: 500 + int(wc.N) ** 2 // 2000,  # measured: 0.4 GB at N = 1001
+        runtime=lambda wc: 5 + int(wc.N) ** 2 // 50000,
+    params:
+        problem=scene_param("problem"),
+        diagonal=scene_param("diagonal"),
+        conventions=scene_param("conventions"),
+    script:
+        "../scripts/norm.py"
+
+
+rule errors:
+    """The scene's errors.csv: one row per N, one column per norm."""
+    input:
+        norms=lambda wc: flat(norm_jsons(wc.scene, scene_of(wc)["norms"])),
+        code=code("errors"),
+    output:
+        csv=PATHS["errors_csv"],
+    log:
+        paths.log("scene", "errors"),
+    conda:
+        "../envs/signorini.yaml"
+    params:
+        N=scene_param("N"),
+        norm_jsons=lambda wc: norm_jsons(wc.scene, scene_of(wc)["norms"]),
+    script:
+        "../scripts/errors.py"
+
+
+rule eoc:
+    """The scene's eoc.csv: EOCs of consecutive meshes and the regression slope."""
+    input:
+        errors=rules.errors.output.csv,
+        code=code("eoc"),
+    output:
+        csv=PATHS["eoc_csv"],
+    log:
+        paths.log("scene", "eoc"),
+    conda:
+        "../envs/signorini.yaml"
+    script:
+        "../scripts/eoc.py"
