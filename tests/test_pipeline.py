@@ -22,6 +22,7 @@ from signorini.studies.scene.eoc import eoc_table
 from signorini.studies.scene.errors import collect_errors
 from signorini.studies.scene.norm import norm_stage
 from signorini.studies.scene.solve import solve_stage
+from signorini.studies.scene.store import SceneMesh
 
 NORMS = list(PAPER_NORMS)
 SMOKE_N = [11, 21, 41]
@@ -104,8 +105,8 @@ def test_cli_rejects_bad_config_before_running(tmp_path):
 
 def solve_chain(d, N: int, npz="solution.npz", json="solution.json") -> None:
     """discretise + solve of the default problem on mesh N into directory d."""
-    discretise_stage(PROBLEM, N, "sw_ne", d / f"system{N}.npz", d / f"system{N}.json")
-    solve_stage(PROBLEM, N, "sw_ne", d / f"system{N}.npz", "active_set", d / npz, d / json)
+    discretise_stage(SceneMesh(PROBLEM, N, "sw_ne"), d / f"system{N}.npz", d / f"system{N}.json")
+    solve_stage(SceneMesh(PROBLEM, N, "sw_ne"), d / f"system{N}.npz", "active_set", d / npz, d / json)
 
 
 def test_stage_chain_and_csv_contract(tmp_path):
@@ -119,7 +120,7 @@ def test_stage_chain_and_csv_contract(tmp_path):
         assert load_json(tmp_path / f"system{N}.json")["n_dofs"] == (N + 1) ** 2
         for n in norm_jsons:
             out = tmp_path / f"N{N}_{n}.json"
-            norm_stage(PROBLEM, N, "sw_ne", npz, n, out)
+            norm_stage(SceneMesh(PROBLEM, N, "sw_ne"), npz, n, out, {})
             norm_jsons[n].append(out)
     collect_errors([8, 16], norm_jsons, tmp_path / "errors.csv")
     eoc_table(tmp_path / "errors.csv", tmp_path / "eoc.csv")
@@ -132,9 +133,15 @@ def test_stage_chain_and_csv_contract(tmp_path):
 
 
 def test_solve_refuses_the_system_of_another_mesh(tmp_path):
-    discretise_stage(PROBLEM, 8, "sw_ne", tmp_path / "system.npz", tmp_path / "system.json")
+    discretise_stage(SceneMesh(PROBLEM, 8, "sw_ne"), tmp_path / "system.npz", tmp_path / "system.json")
     with pytest.raises(CorruptArtifactError, match="N=8, not N=9"):
-        solve_stage(PROBLEM, 9, "sw_ne", tmp_path / "system.npz", "active_set", tmp_path / "s.npz", tmp_path / "s.json")
+        solve_stage(
+            SceneMesh(PROBLEM, 9, "sw_ne"),
+            tmp_path / "system.npz",
+            "active_set",
+            tmp_path / "s.npz",
+            tmp_path / "s.json",
+        )
     assert not (tmp_path / "s.npz").exists()
 
 
@@ -144,11 +151,11 @@ def test_norm_stage_refuses_corrupt_solution(tmp_path):
     data = npz.read_bytes()
     npz.write_bytes(data[: len(data) // 2])
     with pytest.raises(CorruptArtifactError):
-        norm_stage(PROBLEM, 8, "sw_ne", npz, "L4", tmp_path / "L4.json")
+        norm_stage(SceneMesh(PROBLEM, 8, "sw_ne"), npz, "L4", tmp_path / "L4.json", {})
     assert not (tmp_path / "L4.json").exists()
     with pytest.raises(CorruptArtifactError, match="shape"):  # a solution of another mesh
         save_npz(npz, u=np.zeros(10))
-        norm_stage(PROBLEM, 8, "sw_ne", npz, "L4", tmp_path / "L4.json")
+        norm_stage(SceneMesh(PROBLEM, 8, "sw_ne"), npz, "L4", tmp_path / "L4.json", {})
 
 
 def test_quarantine_moves_only_corrupt_artifacts(tmp_path):
@@ -173,9 +180,15 @@ def test_failed_certificate_writes_nothing_and_logs_residuals(tmp_path, monkeypa
 
     monkeypatch.setattr(signorini.studies.scene.solve, "solve_discrete", failing)
     log = tmp_path / "solve.log"
-    discretise_stage(PROBLEM, 8, "sw_ne", tmp_path / "system.npz", tmp_path / "system.json")
+    discretise_stage(SceneMesh(PROBLEM, 8, "sw_ne"), tmp_path / "system.npz", tmp_path / "system.json")
     with pytest.raises(KKTError), job_log(log):
-        solve_stage(PROBLEM, 8, "sw_ne", tmp_path / "system.npz", "active_set", tmp_path / "s.npz", tmp_path / "s.json")
+        solve_stage(
+            SceneMesh(PROBLEM, 8, "sw_ne"),
+            tmp_path / "system.npz",
+            "active_set",
+            tmp_path / "s.npz",
+            tmp_path / "s.json",
+        )
     assert not (tmp_path / "s.npz").exists() and not (tmp_path / "s.json").exists()
     assert "stationarity=1.00e-03" in log.read_text()
 
@@ -211,7 +224,10 @@ def test_scene_added_with_configfile_plans_its_norms_only(tmp_path):
     (tmp_path / "mine.yaml").write_text(yaml.safe_dump(mine))
     jobs = planned(snakemake(tmp_path, "-n", "results/mine/eoc.csv", "--configfile", "mine.yaml"))
     assert sorted((wc["N"], wc["norm"]) for rule, wc in jobs if rule == "norm") == [
-        ("16", "H1"), ("16", "L2"), ("8", "H1"), ("8", "L2")
+        ("16", "H1"),
+        ("16", "L2"),
+        ("8", "H1"),
+        ("8", "L2"),
     ]
     assert {rule for rule, _ in jobs} == {"discretise", "solve", "norm", "errors", "eoc"}
 

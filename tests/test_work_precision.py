@@ -21,7 +21,7 @@ from signorini.solvers import Certificate, NotConvergedError, SolveResult
 from signorini.studies.scene.discretise import discretise_stage
 from signorini.studies.scene.norm import norm_stage
 from signorini.studies.scene.solve import solve_stage
-from signorini.studies.scene.store import load_system
+from signorini.studies.scene.store import SceneMesh, load_system
 from signorini.studies.work_precision import findings as wpf
 from signorini.studies.work_precision import measure as wp
 from signorini.studies.work_precision.study import study_configs
@@ -119,11 +119,11 @@ def small_study(tmp_path_factory):
     workflow provides them to a measurement job."""
     d = tmp_path_factory.mktemp("wp")
     N = 12
-    discretise_stage(PROBLEM, N, "sw_ne", d / "system.npz", d / "system.json")
-    solve_stage(PROBLEM, N, "sw_ne", d / "system.npz", "active_set", d / "solution.npz", d / "solution.json")
+    discretise_stage(SceneMesh(PROBLEM, N, "sw_ne"), d / "system.npz", d / "system.json")
+    solve_stage(SceneMesh(PROBLEM, N, "sw_ne"), d / "system.npz", "active_set", d / "solution.npz", d / "solution.json")
     disc = {}
     for n in NORMS:
-        norm_stage(PROBLEM, N, "sw_ne", d / "solution.npz", n, d / f"{n}.json")
+        norm_stage(SceneMesh(PROBLEM, N, "sw_ne"), d / "solution.npz", n, d / f"{n}.json", {})
         disc[n] = d / f"{n}.json"
     return {"dir": d, "N": N, "disc": disc}
 
@@ -138,7 +138,7 @@ def measure(small_study, config: dict, tolerances=(1e-2,), out="out.json", prev_
         "disc": small_study["disc"],
         "prev": prev_json,
     }
-    info = wp.measure_stage(PROBLEM, small_study["N"], "sw_ne", spec, tolerances, 30.0, inputs, d / out)
+    info = wp.measure_stage(SceneMesh(PROBLEM, small_study["N"], "sw_ne"), spec, tolerances, 30.0, inputs, d / out)
     return info["records"]
 
 

@@ -2,9 +2,9 @@
 
 from signorini.pipeline.joblog import job_log
 from signorini.studies.scene.discretise import discretise_stage
+from signorini.studies.scene.store import SceneMesh
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake.log[0]):
-    p, o = snakemake.params, snakemake.output
-    discretise_stage(p.problem, int(snakemake.wildcards.N), p.diagonal, o.npz, o.json)
+    discretise_stage(SceneMesh.of_job(snakemake), snakemake.output.npz, snakemake.output.json)

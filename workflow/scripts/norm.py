@@ -2,11 +2,10 @@
 
 from signorini.pipeline.joblog import job_log
 from signorini.studies.scene.norm import norm_stage
+from signorini.studies.scene.store import SceneMesh
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake.log[0]):
-    p, wc = snakemake.params, snakemake.wildcards
-    norm_stage(
-        p.problem, int(wc.N), p.diagonal, snakemake.input.solution, wc.norm, snakemake.output.json, p.conventions
-    )
+    at, i, o = SceneMesh.of_job(snakemake), snakemake.input, snakemake.output
+    norm_stage(at, i.solution, snakemake.wildcards.norm, o.json, snakemake.params.conventions)

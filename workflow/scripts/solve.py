@@ -2,10 +2,10 @@
 
 from signorini.pipeline.joblog import job_log
 from signorini.studies.scene.solve import solve_stage
+from signorini.studies.scene.store import SceneMesh
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake.log[0]):
     p, o = snakemake.params, snakemake.output
-    N = int(snakemake.wildcards.N)
-    solve_stage(p.problem, N, p.diagonal, snakemake.input.system, p.solver, o.npz, o.json, p.solver_options)
+    solve_stage(SceneMesh.of_job(snakemake), snakemake.input.system, p.solver, o.npz, o.json, p.solver_options)

@@ -1,10 +1,10 @@
 """rule theory_quantities: supercloseness, discrete H^{1/2} norm, contact set for one scene and N."""
 
 from signorini.pipeline.joblog import job_log
+from signorini.studies.scene.store import SceneMesh
 from signorini.studies.theory.quantities import quantities_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake.log[0]):
-    p = snakemake.params
-    quantities_stage(p.problem, int(snakemake.wildcards.N), p.diagonal, snakemake.input.solution, snakemake.output.json)
+    quantities_stage(SceneMesh.of_job(snakemake), snakemake.input.solution, snakemake.output.json)

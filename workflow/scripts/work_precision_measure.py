@@ -1,6 +1,7 @@
 """rule work_precision_measure: one solver configuration at all its tolerances on one mesh."""
 
 from signorini.pipeline.joblog import job_log
+from signorini.studies.scene.store import SceneMesh
 from signorini.studies.work_precision.measure import measure_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
@@ -15,9 +16,7 @@ with job_log(snakemake.log[0]):
         "prev": i.prev or None,
     }
     measure_stage(
-        p.problem,
-        int(snakemake.wildcards.N),
-        p.diagonal,
+        SceneMesh.of_job(snakemake),
         p.config,
         p.tolerances,
         p.time_limit_s,

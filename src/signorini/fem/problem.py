@@ -141,11 +141,14 @@ class Problem:
 # constant solutions below are also the *discrete* solutions, up to round-off.
 
 
-def _finite(obj, names: tuple[str, ...]) -> None:
+def _check_parameters(obj, names: tuple[str, ...]) -> None:
+    """Every named parameter a finite number, the reaction coefficient ``c`` non-negative."""
     for name in names:
         value = getattr(obj, name)
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
             raise ProblemParameterError(f"problem parameter {name}={value!r} must be a finite number")
+    if obj.c < 0.0:
+        raise ProblemParameterError(f"reaction coefficient c={obj.c} must be non-negative")
 
 
 @dataclass(frozen=True)
@@ -168,9 +171,7 @@ class ConstantProblem:
     c: float = 1.0
 
     def __post_init__(self) -> None:
-        _finite(self, ("value", "c"))
-        if self.c < 0.0:
-            raise ProblemParameterError(f"reaction coefficient c={self.c} must be non-negative")
+        _check_parameters(self, ("value", "c"))
         if self.value < 0.0:
             raise ProblemParameterError(
                 f"value={self.value} < 0: the solution is the Dirichlet solution, not known in closed form "
@@ -210,11 +211,9 @@ class FullContactProblem:
     c: float = 1.0
 
     def __post_init__(self) -> None:
-        _finite(self, ("A", "c"))
+        _check_parameters(self, ("A", "c"))
         if self.A < 0.0:
             raise ProblemParameterError(f"amplitude A={self.A} must be non-negative (A < 0 violates ∂_ν u ≥ 0)")
-        if self.c < 0.0:
-            raise ProblemParameterError(f"reaction coefficient c={self.c} must be non-negative")
 
     def as_dict(self) -> dict[str, float | str]:
         return {"kind": "full_contact", "A": float(self.A), "c": float(self.c)}

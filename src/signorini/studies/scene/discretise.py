@@ -10,23 +10,19 @@ from __future__ import annotations
 import logging
 import os
 import time
-from collections.abc import Mapping
 
 from signorini.fem.discrete import build
-from signorini.fem.mesh import mesh_width
-from signorini.fem.problem import Problem
 from signorini.pipeline.artifacts import save_json, save_npz
+from signorini.studies.scene.store import SceneMesh
 
 log = logging.getLogger(__name__)
 
 
-def discretise_stage(
-    problem_params: Mapping, N: int, diagonal: str, out_npz: str | os.PathLike, out_json: str | os.PathLike
-) -> dict:
-    """Mesh and assemble (S_h) for ``N`` cells per side; save the system and the build time."""
-    problem = Problem.from_params(problem_params)
+def discretise_stage(at: SceneMesh, out_npz: str | os.PathLike, out_json: str | os.PathLike) -> dict:
+    """Mesh and assemble (S_h) on one mesh of a scene; save the system and the build time."""
+    problem, N, diagonal = at.problem, at.N, at.diagonal
     t0 = time.perf_counter()
-    disc = build(problem, int(N), diagonal)
+    disc = build(problem, N, diagonal)
     build_s = time.perf_counter() - t0
     A = disc.A.tocsr()
     save_npz(
@@ -37,12 +33,12 @@ def discretise_stage(
         shape=A.shape,
         b=disc.b,
         boundary=disc.boundary,
-        N=int(N),
+        N=N,
         diagonal=diagonal,
     )
     info = {
-        "N": int(N),
-        "h": mesh_width(int(N)),
+        "N": N,
+        "h": at.h,
         "diagonal": diagonal,
         "problem": problem.as_dict(),
         "n_dofs": int(disc.b.size),

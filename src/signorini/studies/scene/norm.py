@@ -8,42 +8,33 @@ import os
 import time
 from collections.abc import Mapping
 
-from signorini.fem.mesh import friedrichs_keller, mesh_width
 from signorini.fem.norms import Conventions, evaluate_norms, parse_norm
-from signorini.fem.problem import Problem
 from signorini.pipeline.artifacts import save_json
-from signorini.studies.scene.store import load_solution
+from signorini.studies.scene.store import SceneMesh
 
 log = logging.getLogger(__name__)
 
 
 def norm_stage(
-    problem_params: Mapping,
-    N: int,
-    diagonal: str,
-    solution_npz: str | os.PathLike,
-    norm: str,
-    out_json: str | os.PathLike,
-    conventions: Mapping | None = None,
+    at: SceneMesh, solution_npz: str | os.PathLike, norm: str, out_json: str | os.PathLike, conventions: Mapping
 ) -> dict:
-    """One norm of ``u - u_h`` on the mesh with ``N`` cells per side; saves value and timing."""
+    """One norm of ``u - u_h`` on one mesh of a scene; saves value and timing."""
     parse_norm(norm)  # fail before any work on an unknown name
-    problem = Problem.from_params(problem_params)
-    conv = Conventions(**dict(conventions or {}))
-    u_h = load_solution(solution_npz, N, diagonal)
+    N, conv = at.N, Conventions(**dict(conventions))
+    u_h = at.load_solution(solution_npz)
     t0 = time.perf_counter()
-    mesh = friedrichs_keller(int(N), diagonal)
+    mesh = at.mesh()
     t1 = time.perf_counter()
-    value = evaluate_norms(problem, mesh, u_h, [norm], conv)[norm]  # chunked: bounded memory
+    value = evaluate_norms(at.problem, mesh, u_h, [norm], conv)[norm]  # chunked: bounded memory
     t2 = time.perf_counter()
     log.info("N=%d %s = %.6e (mesh %.2f s, norm %.3f s)", N, norm, value, t1 - t0, t2 - t1)
     info = {
-        "N": int(N),
-        "h": mesh_width(int(N)),
+        "N": N,
+        "h": at.h,
         "norm": norm,
         "value": float(value),
         "conventions": conv.as_dict(),
-        "diagonal": diagonal,
+        "diagonal": at.diagonal,
         "timings": {
             "mesh_s": t1 - t0,
             "norm_s": t2 - t1,

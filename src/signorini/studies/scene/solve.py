@@ -13,19 +13,15 @@ import time
 from collections.abc import Mapping
 
 from signorini.fem.discrete import DiscreteProblem
-from signorini.fem.mesh import friedrichs_keller, mesh_width
-from signorini.fem.problem import Problem
 from signorini.fem.solve import solve_discrete
 from signorini.pipeline.artifacts import save_json, save_npz
-from signorini.studies.scene.store import load_system
+from signorini.studies.scene.store import SceneMesh, load_system
 
 log = logging.getLogger(__name__)
 
 
 def solve_stage(
-    problem_params: Mapping,
-    N: int,
-    diagonal: str,
+    at: SceneMesh,
     system_npz: str | os.PathLike,
     solver: str,
     out_npz: str | os.PathLike,
@@ -33,11 +29,11 @@ def solve_stage(
     solver_options: Mapping | None = None,
 ) -> dict:
     """Solve (S_h) from the ``discretise`` archive; save ``u``, ``λ``, the contact set and the diagnostics."""
-    problem = Problem.from_params(problem_params)
+    problem, N, diagonal = at.problem, at.N, at.diagonal
     t0 = time.perf_counter()
     A, b, boundary = load_system(system_npz, N)
-    mesh = friedrichs_keller(int(N), diagonal)  # the cascade interpolates onto its nodes
-    disc = DiscreteProblem(problem, int(N), diagonal, mesh, A, b, boundary)
+    mesh = at.mesh()  # the cascade interpolates onto its nodes
+    disc = DiscreteProblem(problem, N, diagonal, mesh, A, b, boundary)
     t1 = time.perf_counter()
     result = solve_discrete(disc, solver=solver, **dict(solver_options or {}))
     t2 = time.perf_counter()
@@ -50,8 +46,8 @@ def solve_stage(
         result.certificate.describe(),
     )
     info = {
-        "N": int(N),
-        "h": mesh_width(int(N)),
+        "N": N,
+        "h": at.h,
         "diagonal": diagonal,
         "problem": problem.as_dict(),
         "solver_requested": solver,
@@ -66,6 +62,6 @@ def solve_stage(
         },
         "summary": result.summary(),
     }
-    save_npz(out_npz, u=result.u, lam=result.lam, active=result.active, N=int(N), diagonal=diagonal)
+    save_npz(out_npz, u=result.u, lam=result.lam, active=result.active, N=N, diagonal=diagonal)
     save_json(out_json, info)
     return info

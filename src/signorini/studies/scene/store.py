@@ -11,15 +11,49 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from signorini.fem.mesh import friedrichs_keller, mesh_width
+from signorini.fem.problem import Problem
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz
 
 if TYPE_CHECKING:
     import pandas as pd
     import scipy.sparse as sp
+    from skfem import MeshTri
+
+
+@dataclass(frozen=True)
+class SceneMesh:
+    """One mesh of a scene, what a per-mesh job works on: the scene's problem parameters, the
+    cells per side ``N`` and the diagonal of the Friedrichs–Keller mesh."""
+
+    problem_params: Mapping
+    N: int
+    diagonal: str
+
+    @classmethod
+    def of_job(cls, job: Any) -> SceneMesh:
+        """From a Snakemake job object (``params.problem``, ``params.diagonal``, ``wildcards.N``)."""
+        return cls(dict(job.params.problem), int(job.wildcards.N), str(job.params.diagonal))
+
+    @property
+    def problem(self) -> Problem:
+        return Problem.from_params(self.problem_params)
+
+    @property
+    def h(self) -> float:
+        return mesh_width(self.N)
+
+    def mesh(self) -> MeshTri:
+        return friedrichs_keller(self.N, self.diagonal)
+
+    def load_solution(self, solution_npz: str | os.PathLike) -> np.ndarray:
+        """``u_h`` of this mesh from a solve artifact (``load_solution``)."""
+        return load_solution(solution_npz, self.N, self.diagonal)
 
 
 def load_system(path: str | os.PathLike, N: int | None = None) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
@@ -59,8 +93,6 @@ def read_errors(scene_N: Sequence[int], norm_jsons: Mapping[str, Sequence[str | 
     """A DataFrame with columns ``N``, ``h`` and one column per norm (in the order of ``norm_jsons``),
     read from the per-norm JSON artifacts; ``norm_jsons[name][k]`` belongs to ``scene_N[k]``."""
     import pandas as pd
-
-    from signorini.fem.mesh import mesh_width
 
     Ns = [int(N) for N in scene_N]
     data: dict[str, list] = {"N": Ns, "h": [mesh_width(N) for N in Ns]}

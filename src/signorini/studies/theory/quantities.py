@@ -20,7 +20,7 @@ from __future__ import annotations
 import logging
 import os
 import time
-from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.linalg as sla
@@ -30,6 +30,9 @@ from skfem import LinearForm, MeshTri
 from signorini.fem.assembly import CHUNK_ELEMENTS, assemble_linear_form, system_matrix
 from signorini.fem.problem import Problem
 from signorini.solvers.linalg import factorize
+
+if TYPE_CHECKING:
+    from signorini.studies.scene.store import SceneMesh
 
 log = logging.getLogger(__name__)
 
@@ -200,24 +203,15 @@ def theory_quantities(problem: Problem, mesh: MeshTri, u_h: np.ndarray) -> dict:
     }
 
 
-def quantities_stage(
-    problem_params: Mapping,
-    N: int,
-    diagonal: str,
-    solution_npz: str | os.PathLike,
-    out_json: str | os.PathLike,
-) -> dict:
+def quantities_stage(at: SceneMesh, solution_npz: str | os.PathLike, out_json: str | os.PathLike) -> dict:
     """Stage ``theory_quantities``: supercloseness, discrete H^{1/2}(∂Ω) norm and contact-set
     metrics of one solution."""
-    from signorini.fem.mesh import friedrichs_keller, mesh_width
     from signorini.pipeline.artifacts import save_json
-    from signorini.studies.scene.store import load_solution
 
-    problem = Problem.from_params(problem_params)
-    u_h = load_solution(solution_npz, N, diagonal)
+    u_h = at.load_solution(solution_npz)
     t0 = time.perf_counter()
-    values = theory_quantities(problem, friedrichs_keller(int(N), diagonal), u_h)
-    info = {"N": int(N), "h": mesh_width(int(N)), **values, "timings": {"theory_s": time.perf_counter() - t0}}
-    log.info("N=%d %s", N, {k: v for k, v in values.items() if k != "contact"})
+    values = theory_quantities(at.problem, at.mesh(), u_h)
+    info = {"N": at.N, "h": at.h, **values, "timings": {"theory_s": time.perf_counter() - t0}}
+    log.info("N=%d %s", at.N, {k: v for k, v in values.items() if k != "contact"})
     save_json(out_json, info)
     return info

@@ -46,8 +46,8 @@ from typing import Any
 import numpy as np
 
 from signorini.fem.p1norms import p1_norms
-from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz, save_json
-from signorini.studies.scene.store import load_system, read_norm
+from signorini.pipeline.artifacts import load_json, save_json
+from signorini.studies.scene.store import SceneMesh, load_system, read_norm
 from signorini.studies.work_precision.study import EXACT_LABEL, GROWTH_EXPONENT, SolverConfig
 
 log = logging.getLogger(__name__)
@@ -242,31 +242,18 @@ class _Inputs:
     conventions: Any  # fem.norms.Conventions
 
 
-def _load_inputs(
-    problem_params: Mapping,
-    N: int,
-    diagonal: str,
-    system_npz: str | os.PathLike,
-    system_json: str | os.PathLike,
-    exact_npz: str | os.PathLike,
-    disc_norm_jsons: Mapping[str, str | os.PathLike],
-    prev_json: str | os.PathLike | None,
-    conventions: Mapping | None,
-) -> _Inputs:
+def _load_inputs(at: SceneMesh, inputs: Mapping[str, Any], conventions: Mapping | None) -> _Inputs:
+    """The source scene's system, exact solution and norm values (``inputs``, see ``measure_stage``)."""
     from signorini.fem.discrete import DiscreteProblem
-    from signorini.fem.mesh import friedrichs_keller
     from signorini.fem.norms import Conventions
-    from signorini.fem.problem import Problem
 
-    disc_err = {name: read_norm(path, name, N) for name, path in disc_norm_jsons.items()}
-    A, b, boundary = load_system(system_npz, N)
-    mesh = friedrichs_keller(int(N), diagonal)
-    disc = DiscreteProblem(Problem.from_params(problem_params), int(N), diagonal, mesh, A, b, boundary)
-    exact = load_npz(exact_npz)["u"]
-    if exact.shape != b.shape:
-        raise CorruptArtifactError(f"{exact_npz}: u has shape {exact.shape}, expected {b.shape} for N={N}")
+    disc_err = {name: read_norm(path, name, at.N) for name, path in inputs["disc"].items()}
+    A, b, boundary = load_system(inputs["system"], at.N)
+    disc = DiscreteProblem(at.problem, at.N, at.diagonal, at.mesh(), A, b, boundary)
+    exact = at.load_solution(inputs["exact"])
+    prev_json = inputs.get("prev")
     prev = {r["tol_label"]: r for r in load_json(prev_json)["records"]} if prev_json else {}
-    build_s = float(load_json(system_json)["timings"]["build_s"])
+    build_s = float(load_json(inputs["system_json"])["timings"]["build_s"])
     return _Inputs(disc, exact, disc_err, build_s, prev, Conventions(**dict(conventions or {})))
 
 
@@ -320,9 +307,7 @@ def _measure(inp: _Inputs, config: SolverConfig, tol: float | None, time_limit: 
 
 
 def measure_stage(
-    problem_params: Mapping,
-    N: int,
-    diagonal: str,
+    at: SceneMesh,
     config: Mapping,
     tolerances: Sequence[float],
     time_limit_s: float | None,
@@ -332,11 +317,11 @@ def measure_stage(
     growth_exponent: float = GROWTH_EXPONENT,
 ) -> dict:
     """Stage ``work_precision_measure``: run one solver configuration (``SolverConfig.as_dict()``)
-    on mesh ``N`` at its default and at every tolerance of ``tolerances``; save the records (see
+    on one mesh of the scene (``at``) at its default and at every tolerance of ``tolerances``; save the records (see
     the module docstring).
 
     ``inputs``: ``system`` and ``system_json`` (the source scene's ``discretise`` artifacts),
-    ``exact`` (its solution), ``disc`` (its norm artifacts of this ``N``, norm → path: the
+    ``exact`` (its solution), ``disc`` (its norm artifacts of this mesh, norm → path: the
     discretisation errors, which also define the norms measured) and ``prev`` (this
     configuration's artifact on the previous mesh, or None, for ``skip_reason``).
     ``time_limit_s`` limits each QP solve (the solver's own option) and drives ``skip_reason``
@@ -345,10 +330,7 @@ def measure_stage(
     started, t_job, load_start = time.time(), time.perf_counter(), os.getloadavg()[0]
     config = SolverConfig(**config)
     time_limit = float(time_limit_s) if time_limit_s is not None else None
-    inp = _load_inputs(
-        problem_params, N, diagonal, inputs["system"], inputs["system_json"], inputs["exact"], inputs["disc"],
-        inputs.get("prev"), conventions,
-    )
+    inp = _load_inputs(at, inputs, conventions)
     _warm_up(config)
     norm_cache: dict[str, dict[str, float]] = {_fingerprint(inp.exact): inp.disc_err}
     records = []
@@ -362,14 +344,14 @@ def measure_stage(
         record.update({f"disc_{n}": v for n, v in inp.disc_err.items()})
         records.append(record)
         log.info(
-            "N=%d %s %s: %s %s time %.3f s, L4 alg %.2e", N, config.name, record["tol_label"], record["status"],
+            "N=%d %s %s: %s %s time %.3f s, L4 alg %.2e", at.N, config.name, record["tol_label"], record["status"],
             record["reason"], record["time_s"], record.get("alg_L4", math.nan),
         )
     wall_s = time.perf_counter() - t_job
     for r in records:
         r["job_wall_s"], r["job_started"] = wall_s, started
     info = {
-        "N": int(N),
+        "N": at.N,
         "config": config.as_dict(),
         "tolerances": [float(t) for t in tolerances],
         "time_limit_s": time_limit,
