@@ -18,8 +18,8 @@ from signorini.pipeline.cache import artifact_ok, quarantine_corrupt
 from signorini.pipeline.config import ConfigError, check_config
 from signorini.pipeline.joblog import job_log
 from signorini.studies.scene.discretise import discretise_stage
-from signorini.studies.scene.eoc import eoc_table
-from signorini.studies.scene.errors import collect_errors
+from signorini.studies.scene.eoc import eoc_stage
+from signorini.studies.scene.errors import errors_stage
 from signorini.studies.scene.norm import norm_stage
 from signorini.studies.scene.solve import solve_stage
 from signorini.studies.scene.store import SceneMesh
@@ -122,8 +122,8 @@ def test_stage_chain_and_csv_contract(tmp_path):
             out = tmp_path / f"N{N}_{n}.json"
             norm_stage(SceneMesh(PROBLEM, N, "sw_ne"), npz, n, out, {})
             norm_jsons[n].append(out)
-    collect_errors([8, 16], norm_jsons, tmp_path / "errors.csv")
-    eoc_table(tmp_path / "errors.csv", tmp_path / "eoc.csv")
+    errors_stage([8, 16], norm_jsons, tmp_path / "errors.csv")
+    eoc_stage(tmp_path / "errors.csv", tmp_path / "eoc.csv")
     rows = list(csv.DictReader((tmp_path / "errors.csv").open()))
     assert list(rows[0]) == ["N", "h", "L4", "W14"]
     assert [int(r["N"]) for r in rows] == [8, 16] and float(rows[1]["h"]) == mesh_width(16)

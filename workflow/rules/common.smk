@@ -74,34 +74,16 @@ def code(script):
 
 
 def norm_jsons(scene, norms):
-    """{norm: [artifact per N of the scene]}"""
+    """{norm: [the norm job's artifact per N of the scene]}"""
     Ns = scene_of(scene)["N"]
     return {
-        n: [PATHS["norm_json"].format(scene=scene, N=N, norm=n) for N in Ns]
+        n: [rules.norm.output.json.format(scene=scene, N=N, norm=n) for N in Ns]
         for n in norms
     }
 
 
 def flat(mapping):
     return [p for values in mapping.values() for p in values]
-
-
-PAPER_OUTPUTS = [
-    *(
-        path
-        for rule in (
-            "table1",
-            "table2",
-            "figure2",
-            "figure3",
-            "reproduction",
-            "runtime",
-        )
-        for path in FIGURES[rule].values()
-    ),
-    PATHS["errors_csv"].format(scene=FIG),
-    PATHS["eoc_csv"].format(scene=FIG),
-]
 
 
 # --- the paper's run times ---
@@ -165,7 +147,7 @@ def wp_previous(wildcards):
     k = Ns.index(int(wildcards.N))
     if k == 0:
         return []
-    return PATHS["wp_measure_json"].format(
+    return rules.work_precision_measure.output.json.format(
         scene=wildcards.scene, N=Ns[k - 1], solver=wildcards.solver
     )
 
@@ -182,7 +164,7 @@ def wp_disc_norms(wildcards):
 def wp_measure_jsons(scene):
     """Every measurement artifact of a scene: one per (N, solver configuration)."""
     return [
-        PATHS["wp_measure_json"].format(scene=scene, N=N, solver=name)
+        rules.work_precision_measure.output.json.format(scene=scene, N=N, solver=name)
         for N in scene_of(scene)["N"]
         for name in wp_configs(scene)
     ]

@@ -35,9 +35,11 @@ rule stability_atlas:
     """The atlas's table, report and figure from every case."""
     input:
         jsons=lambda wc: stab_atlas.case_artifacts(
-            config, STAB, PATHS["atlas_case_json"]
+            config, STAB, rules.stability_case.output.json
         ),
-        npzs=lambda wc: stab_atlas.case_artifacts(config, STAB, PATHS["atlas_case_npz"]),
+        npzs=lambda wc: stab_atlas.case_artifacts(
+            config, STAB, rules.stability_case.output.npz
+        ),
         code=code("stability_atlas"),
     output:
         **FIGURES["stability_atlas"],

@@ -1,9 +1,9 @@
 """rule errors: results/<scene>/errors.csv from the per-norm artifacts."""
 
 from signorini.pipeline.joblog import job_log
-from signorini.studies.scene.errors import collect_errors
+from signorini.studies.scene.errors import errors_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake.log[0]):
-    collect_errors(snakemake.params.N, snakemake.params.norm_jsons, snakemake.output.csv)
+    errors_stage(snakemake.params.N, snakemake.params.norm_jsons, snakemake.output.csv)

@@ -1,10 +1,10 @@
 """rule reproduction: paper_figures/reproduction.md (ours | paper | relative deviation)."""
 
 from signorini.pipeline.joblog import job_log
-from signorini.studies.paper.reproduction import reproduction
+from signorini.studies.paper.reproduction import reproduction_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake.log[0]):
     i = snakemake.input
-    reproduction(i.table1, i.table2, i.paper_table1, i.paper_table2, i.remarks, snakemake.output.md)
+    reproduction_stage(i.table1, i.table2, i.paper_table1, i.paper_table2, i.remarks, snakemake.output.md)

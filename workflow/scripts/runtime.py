@@ -1,9 +1,9 @@
 """rule runtime: paper_figures/runtime.csv from the benchmark: files and in-job timers."""
 
 from signorini.pipeline.joblog import job_log
-from signorini.studies.paper.runtime import collect_runtime
+from signorini.studies.paper.runtime import runtime_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake.log[0]):
-    collect_runtime(snakemake.params.jobs, snakemake.output.csv)
+    runtime_stage(snakemake.params.jobs, snakemake.output.csv)

@@ -1,9 +1,9 @@
 """rule work_precision_table: paper_figures/work_precision.csv (every measurement)."""
 
 from signorini.pipeline.joblog import job_log
-from signorini.studies.work_precision.table import collect_stage
+from signorini.studies.work_precision.table import table_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake.log[0]):
-    collect_stage(snakemake.input.jsons, snakemake.output.csv)
+    table_stage(snakemake.input.jsons, snakemake.output.csv)

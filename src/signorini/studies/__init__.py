@@ -1,4 +1,5 @@
-"""One folder per study: its stages (one module per workflow rule), reports and figures.
+"""One folder per study: its stages (a rule's script calls one ``*_stage`` function), reports and
+figures.
 
 ``scene``: the chain every scene runs (discretise, solve, norm, errors/EOCs); ``paper``: the
 paper's Tables 1–2, Figures 2–3, the reproduction report and the run times; ``theory``,

@@ -59,7 +59,7 @@ def _summary(worst: Mapping[str, float]) -> str:
     return ", ".join(f"{label_md(k)} {100.0 * v:.2f} %" for k, v in worst.items())
 
 
-def reproduction(
+def reproduction_stage(
     ours_table1: str | os.PathLike,
     ours_table2: str | os.PathLike,
     paper_table1: str | os.PathLike,

@@ -34,7 +34,7 @@ def _timer(rule: str, artifact: Mapping) -> float:
     return sum(float(timings.get(key, 0.0)) for key in TIMERS[rule][0])
 
 
-def collect_runtime(jobs: Sequence[Mapping], out_csv: str | os.PathLike) -> None:
+def runtime_stage(jobs: Sequence[Mapping], out_csv: str | os.PathLike) -> None:
     """``runtime.csv`` from the jobs' ``benchmark:`` files and their in-job timers.
 
     ``jobs``: one mapping per job with ``rule``, ``scene``, ``N``, ``norm`` (or ""),

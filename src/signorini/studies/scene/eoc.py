@@ -10,7 +10,7 @@ from signorini.pipeline.artifacts import CorruptArtifactError, atomic_write_csv
 from signorini.studies.scene.store import read_errors_csv
 
 
-def eoc_table(errors_csv: str | os.PathLike, out_csv: str | os.PathLike) -> None:
+def eoc_stage(errors_csv: str | os.PathLike, out_csv: str | os.PathLike) -> None:
     """``eoc.csv`` from ``errors.csv``: EOCs of consecutive meshes and the regression slope."""
     import numpy as np
     import pandas as pd

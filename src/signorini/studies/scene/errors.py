@@ -10,7 +10,7 @@ from signorini.pipeline.artifacts import atomic_write_csv
 from signorini.studies.scene.store import read_errors
 
 
-def collect_errors(
+def errors_stage(
     scene_N: Sequence[int], norm_jsons: Mapping[str, Sequence[str | os.PathLike]], out_csv: str | os.PathLike
 ) -> None:
     """``errors.csv`` from the per-norm artifacts (``norm_jsons[name][k]`` belongs to ``scene_N[k]``)."""

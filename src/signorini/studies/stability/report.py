@@ -8,6 +8,7 @@ import math
 import os
 from collections.abc import Mapping, Sequence
 
+from signorini.fem.mesh import DEFAULT_DIAGONAL
 from signorini.studies.stability.atlas import CORRUPTIONS, GROUPS, STATUSES
 
 
@@ -23,7 +24,7 @@ def _case_line(case: Mapping, sub, norms: Sequence[str], info: Mapping) -> str:
     """The one-line finding of a case (markdown)."""
     p = case["problem"]
     what = ", ".join(f"{k} = {v:g}" if isinstance(v, float) else f"{k} = {v}" for k, v in p.items())
-    mesh = f"N = {case['N']}" + (f", {case['diagonal']}" if case["diagonal"] != "sw_ne" else "")
+    mesh = f"N = {case['N']}" + (f", {case['diagonal']}" if case["diagonal"] != DEFAULT_DIAGONAL else "")
     mesh += f", jitter {case['jitter']:g} h" if case["jitter"] else ""
     head = f"- **{case['name']}** ({mesh}; {what}"
     head += f"; {CORRUPTIONS[case['corrupt']]})" if case["corrupt"] else ")"

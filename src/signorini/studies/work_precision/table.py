@@ -44,7 +44,7 @@ ID_COLUMNS = [
 ]
 
 
-def collect_stage(jsons: Sequence[str | os.PathLike], out_csv: str | os.PathLike) -> pd.DataFrame:
+def table_stage(jsons: Sequence[str | os.PathLike], out_csv: str | os.PathLike) -> pd.DataFrame:
     """``work_precision.csv``: every record of the measurement artifacts, one row each, columns
     ``ID_COLUMNS`` then ``alg_<norm>``, ``total_<norm>``, ``disc_<norm>`` (norm order kept)."""
     import pandas as pd
