@@ -8,7 +8,7 @@ UV_VERSION := 0.13.8
 export UV_COMPILE_BYTECODE_TIMEOUT ?= 600
 CORES ?= 2
 
-.PHONY: setup all test lock lint dag bench clean-results
+.PHONY: setup all test lock lint dag bench report clean-results
 
 ## setup: create .venv with uv from the hash-pinned environment.lock and install the package (editable)
 setup: $(STAMP)
@@ -42,6 +42,13 @@ lint: setup
 ## dag: redraw the rule graph shown in the README (needs graphviz's dot)
 dag: setup
 	$(BIN)/snakemake --rulegraph dot all | dot -Tpng -Gdpi=100 -o workflow/rulegraph.png
+
+## report: the Snakemake report (captions, figures, tables) of every target built so far: results/report.html
+report: setup
+	@targets="$$($(BIN)/python -m signorini.pipeline.paths)"; \
+	if [ -z "$$targets" ]; then echo "nothing built yet: run make all first" >&2; exit 1; fi; \
+	echo "report of: $$targets"; \
+	$(BIN)/snakemake --report results/report.html $$targets
 
 ## bench: wall time of a cold `snakemake -c2 all` and of a no-op rerun, in a temporary copy
 bench: setup

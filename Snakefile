@@ -15,9 +15,11 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 configfile: "workflow/config.yaml"
 
 
-validate(
-    config, "workflow/schemas/config.schema.yaml"
-)  # also fills in the schema's defaults
+# also fills in the schema's defaults (diagonal, solver_options, conventions, figures_scene)
+validate(config, "workflow/schemas/config.schema.yaml")
+
+
+report: "workflow/report/workflow.rst"
 
 
 include: "workflow/rules/common.smk"

@@ -73,6 +73,20 @@ def code(script):
     )
 
 
+def reported(outputs, caption, category, subcategory=None):
+    """{name: path} marked for the Snakemake report, captioned by workflow/report/<caption>.rst."""
+    return {
+        name: report(
+            path,
+            caption=f"../report/{caption}.rst",
+            category=category,
+            subcategory=subcategory,
+            labels={"file": Path(path).name},
+        )
+        for name, path in outputs.items()
+    }
+
+
 def norm_jsons(scene, norms):
     """{norm: [the norm job's artifact per N of the scene]}"""
     Ns = scene_of(scene)["N"]

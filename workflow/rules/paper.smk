@@ -24,7 +24,7 @@ rule table1:
         norms=flat(norm_jsons(FIG, TABLE1_NORMS)),
         code=code("table1"),
     output:
-        **FIGURES["table1"],
+        **reported(FIGURES["table1"], "table1", "Paper", "Tables"),
     log:
         paths.log("scene", "table1", scene=FIG),
     conda:
@@ -42,7 +42,7 @@ rule table2:
         eoc=expand(rules.eoc.output.csv, scene=FIG),
         code=code("table2"),
     output:
-        **FIGURES["table2"],
+        **reported(FIGURES["table2"], "table2", "Paper", "Tables"),
     log:
         paths.log("scene", "table2", scene=FIG),
     conda:
@@ -59,7 +59,7 @@ rule figure2:
         fields=expand(rules.sample.output.npz, scene=FIG),
         code=code("figure2"),
     output:
-        **FIGURES["figure2"],
+        **reported(FIGURES["figure2"], "figure2", "Paper", "Figures"),
     log:
         paths.log("scene", "figure2", scene=FIG),
     conda:
@@ -74,7 +74,7 @@ rule figure3:
         norms=flat(norm_jsons(FIG, FIGURE3_NORMS)),
         code=code("figure3"),
     output:
-        **FIGURES["figure3"],
+        **reported(FIGURES["figure3"], "figure3", "Paper", "Figures"),
     log:
         paths.log("scene", "figure3", scene=FIG),
     conda:
@@ -94,7 +94,7 @@ rule reproduction:
         table2=rules.table2.output.csv,
         code=code("reproduction"),
     output:
-        **FIGURES["reproduction"],
+        **reported(FIGURES["reproduction"], "reproduction", "Paper", "Reproduction"),
     log:
         paths.log("scene", "reproduction", scene=FIG),
     conda:
@@ -110,7 +110,7 @@ rule runtime:
         artifacts=[job["artifact"] for job in runtime_jobs(FIG)],
         code=code("runtime"),
     output:
-        **FIGURES["runtime"],
+        **reported(FIGURES["runtime"], "runtime", "Paper", "Run times"),
     log:
         paths.log("scene", "runtime", scene=FIG),
     conda:

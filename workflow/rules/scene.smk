@@ -84,7 +84,13 @@ rule errors:
         norms=lambda wc: flat(norm_jsons(wc.scene, scene_of(wc)["norms"])),
         code=code("errors"),
     output:
-        csv=PATHS["errors_csv"],
+        csv=report(
+            PATHS["errors_csv"],
+            caption="../report/errors.rst",
+            category="Scenes",
+            subcategory="{scene}",
+            labels={"scene": "{scene}", "file": "errors.csv"},
+        ),
     log:
         paths.log("scene", "errors"),
     conda:
@@ -102,7 +108,13 @@ rule eoc:
         errors=rules.errors.output.csv,
         code=code("eoc"),
     output:
-        csv=PATHS["eoc_csv"],
+        csv=report(
+            PATHS["eoc_csv"],
+            caption="../report/errors.rst",
+            category="Scenes",
+            subcategory="{scene}",
+            labels={"scene": "{scene}", "file": "eoc.csv"},
+        ),
     log:
         paths.log("scene", "eoc"),
     conda:

@@ -42,7 +42,7 @@ rule stability_atlas:
         ),
         code=code("stability_atlas"),
     output:
-        **FIGURES["stability_atlas"],
+        **reported(FIGURES["stability_atlas"], "stability", "Stability"),
     log:
         paths.log("scene", "atlas", scene=STAB),
     conda:

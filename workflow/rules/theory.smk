@@ -35,7 +35,7 @@ rule theory_report:
         ),
         code=code("theory_report"),
     output:
-        **FIGURES["theory_report"],
+        **reported(FIGURES["theory_report"], "theory", "Theory"),
     log:
         paths.log("scene", "theory_report", scene=THEORY),
     conda:

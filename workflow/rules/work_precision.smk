@@ -53,7 +53,7 @@ rule work_precision_table:
         jsons=lambda wc: wp_measure_jsons(WP),
         code=code("work_precision_table"),
     output:
-        **FIGURES["work_precision_table"],
+        **reported(FIGURES["work_precision_table"], "work_precision", "Work precision"),
     log:
         paths.log("scene", "work_precision_table", scene=WP),
     conda:
@@ -68,7 +68,9 @@ rule work_precision_figures:
         csv=rules.work_precision_table.output.csv,
         code=code("work_precision_figures"),
     output:
-        **FIGURES["work_precision_figures"],
+        **reported(
+            FIGURES["work_precision_figures"], "work_precision", "Work precision"
+        ),
     log:
         paths.log("scene", "work_precision_figures", scene=WP),
     conda:
@@ -87,7 +89,7 @@ rule work_precision_report:
         paper_table2=paths.REFERENCES["paper_table2"],
         code=code("work_precision_report"),
     output:
-        **FIGURES["work_precision_report"],
+        **reported(FIGURES["work_precision_report"], "work_precision", "Work precision"),
     log:
         paths.log("scene", "work_precision_report", scene=WP),
     conda:

@@ -7,6 +7,9 @@ the rules, the cache checks, the notebooks' helpers and the tests all read them 
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 FIGDIR = "paper_figures"
 REFERENCE = "workflow/reference"
 _MESH = "results/{scene}/N{N}"
@@ -90,3 +93,42 @@ class _Open(dict):
 
     def __missing__(self, key: str) -> str:
         return "{" + key + "}"
+
+
+# the target rules and the rules whose outputs they render
+TARGETS = {
+    "all": ("table1", "table2", "figure2", "figure3", "reproduction", "runtime"),
+    "theory": ("theory_report",),
+    "work_precision": ("work_precision_table", "work_precision_figures", "work_precision_report"),
+    "stability": ("stability_atlas",),
+}
+
+
+def _required(target: str, figures_scene: str) -> list[str]:
+    """The files a report of ``target`` shows: its rendered outputs and its scenes' tables."""
+    files = [path for rule in TARGETS[target] for path in FIGURES[rule].values()]
+    scene = {"all": figures_scene, "theory": "theory"}.get(target)
+    if scene is not None:
+        files.append(PATHS["errors_csv"].format(scene=scene))
+    if target == "all":
+        files.append(PATHS["eoc_csv"].format(scene=scene))
+    return files
+
+
+def built_targets(root: str | os.PathLike = ".", figures_scene: str | None = None) -> list[str]:
+    """The targets whose reported files all exist under ``root`` (what ``make report`` reports);
+    ``figures_scene`` defaults to the one of ``workflow/config.yaml``."""
+    if figures_scene is None:
+        import yaml
+
+        config = yaml.safe_load((Path(root) / "workflow/config.yaml").read_text())
+        figures_scene = config.get("figures_scene", "paper")
+    return [
+        target
+        for target in TARGETS
+        if all((Path(root) / path).exists() for path in _required(target, figures_scene))
+    ]
+
+
+if __name__ == "__main__":  # `python -m signorini.pipeline.paths`: the built targets, for `make report`
+    print(" ".join(built_targets()))
