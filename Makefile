@@ -8,7 +8,7 @@ UV_VERSION := 0.13.8
 export UV_COMPILE_BYTECODE_TIMEOUT ?= 600
 CORES ?= 2
 
-.PHONY: setup all test lock lint dag bench report clean-results
+.PHONY: setup all test lock lint dag bench report clean-corrupt clean-results
 
 ## setup: create .venv with uv from the hash-pinned environment.lock and install the package (editable)
 setup: $(STAMP)
@@ -50,15 +50,13 @@ report: setup
 	echo "report of: $$targets"; \
 	$(BIN)/snakemake --report results/report.html $$targets
 
-## bench: wall time of a cold `snakemake -c2 all` and of a no-op rerun, in a temporary copy
+## bench: wall time of a cold `snakemake -c2 all`, a no-op rerun and a dry run (medians of 5) -> results/benchmarks/bench.json
 bench: setup
-	@set -e; tmp=$$(mktemp -d); cp -r Snakefile workflow src $$tmp/; cd $$tmp; \
-	TIMEFORMAT='cold cache, snakemake -c$(CORES) all: %R s wall'; \
-	time $(CURDIR)/$(BIN)/snakemake -c$(CORES) all -q > cold.log 2>&1; \
-	TIMEFORMAT='no-op rerun, snakemake -c$(CORES) all: %R s wall'; \
-	time $(CURDIR)/$(BIN)/snakemake -c$(CORES) all -q > noop.log 2>&1; \
-	grep -q "Nothing to be done" noop.log || { echo "the rerun was not a no-op" >&2; exit 1; }; \
-	cd $(CURDIR); rm -rf $$tmp
+	$(BIN)/python benchmarks/workflow.py
+
+## clean-corrupt: delete the damaged artifacts a run moved aside (results/**/*.corrupt)
+clean-corrupt:
+	find results -name '*.corrupt' -print -delete 2>/dev/null || true
 
 ## clean-results: remove the cache (results/) and Snakemake's metadata
 clean-results:

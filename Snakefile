@@ -1,6 +1,7 @@
 # Reproduces Tables 1-2 and Figures 2-3 of Christof & Haubner (scalar Signorini problem), Section 7.
 # The chain per scene and N: discretise -> solve -> norm -> errors/eoc -> tables/figures; see README.md.
 import os
+import sys
 
 from snakemake.utils import min_version, validate
 
@@ -15,6 +16,9 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 configfile: "workflow/config.yaml"
 
 
+# jsonschema would import rfc3987_syntax (a notebook dependency's extra; it compiles 38 lark
+# grammars, about 1 s) for a string format this schema never uses: leave it out.
+sys.modules.setdefault("rfc3987_syntax", None)
 # also fills in the schema's defaults (diagonal, solver_options, conventions, figures_scene)
 validate(config, "workflow/schemas/config.schema.yaml")
 

@@ -124,6 +124,7 @@ DRIVER = textwrap.dedent(
     from snakemake.cli import main
 
     def dry(args):
+        sys.argv = ["snakemake", "-n", *args]  # what the Snakefile sees (a dry run: read-only)
         buf = io.StringIO()
         with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(buf):
             try:

@@ -14,7 +14,7 @@ from helpers import PROBLEM, ROOT, clone_built, copy_repo, planned, planned_rule
 from signorini.fem.mesh import mesh_width
 from signorini.paper import PAPER_NORMS
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz, save_json, save_npz
-from signorini.pipeline.cache import artifact_ok, quarantine_corrupt
+from signorini.pipeline.cache import artifact_ok, executes, quarantine_corrupt
 from signorini.pipeline.config import ConfigError, check_config
 from signorini.pipeline.joblog import job_log
 from signorini.studies.scene.discretise import discretise_stage
@@ -286,17 +286,26 @@ def test_truncated_artifacts_are_detected_and_rebuilt(built_repo, tmp_path):
     npz.write_bytes(npz.read_bytes()[: npz.stat().st_size // 3])
     njson.write_text(njson.read_text()[:40])
     errors.write_text(before_errors[: len(before_errors) - 30])
-    # planning moves them aside; errors.csv is rebuilt, and so is the norm it needs ...
-    jobs = planned(snakemake(repo, "-n", "results/smoke/errors.csv"))
+    damaged = {path: path.read_bytes() for path in (npz, njson, errors)}
+    # read-only calls name them and touch nothing
+    for args in (["-n", "results/smoke/errors.csv"], ["--lint"], ["-l"], ["--summary"]):
+        proc = snakemake(repo, *args, check=False)
+        assert all(path.read_bytes() == data for path, data in damaged.items()), args
+        assert not list(res.rglob("*.corrupt")), args
+        if args[0] == "-n":
+            assert all(str(path.relative_to(repo)) in proc.stderr for path in damaged), proc.stderr
+    # a run moves them aside; errors.csv is rebuilt, and so is the norm it needs ...
+    proc = snakemake(repo, "-c2", "results/smoke/errors.csv")
     for path in (npz, njson, errors):
-        assert not path.exists() and path.with_name(path.name + ".corrupt").exists()
-    assert ("norm", {"scene": "smoke", "N": "21", "norm": "L4"}) in jobs and ("errors", {"scene": "smoke"}) in jobs
+        assert path.with_name(path.name + ".corrupt").exists()
+    ran = planned(proc)
+    assert ("norm", {"scene": "smoke", "N": "21", "norm": "L4"}) in ran and ("errors", {"scene": "smoke"}) in ran
     # ... while the N11 norms, computed from the sound solution, stay valid; the solution
     # is rebuilt (never read) as soon as a job needs it, e.g. a norm not computed yet
-    assert not {"discretise", "solve"} & {rule for rule, _ in jobs}
+    assert not {"discretise", "solve"} & {rule for rule, _ in ran} and not npz.exists()
     new_norm = "results/smoke/N11/norms/L2.json"
     assert ("solve", {"scene": "smoke", "N": "11"}) in planned(snakemake(repo, "-n", new_norm))
-    snakemake(repo, "-c2", "results/smoke/errors.csv", "results/smoke/eoc.csv", new_norm)
+    snakemake(repo, "-c2", "results/smoke/eoc.csv", new_norm)
     np.testing.assert_allclose(load_npz(npz)["u"], before_u, rtol=0, atol=1e-14)
     assert load_json(njson)["value"] == pytest.approx(before_l4, rel=1e-12)
     assert load_json(res / "N11/norms/L2.json")["value"] > 0
@@ -304,6 +313,27 @@ def test_truncated_artifacts_are_detected_and_rebuilt(built_repo, tmp_path):
     assert [r["N"] for r in rebuilt] == ["11", "21", "41"]
     for old, new in zip(csv.DictReader(before_errors.splitlines()), rebuilt, strict=True):
         assert float(new["L4"]) == pytest.approx(float(old["L4"]), rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    ("argv", "runs"),
+    [
+        (["snakemake", "-c2", "all"], True),
+        (["snakemake", "--cores", "2", "--profile", "workflow/profiles/local"], True),
+        (["snakemake", "-c2", "--report-after-run", "all"], True),
+        (["snakemake", "-n", "all"], False),
+        (["snakemake", "-np", "all"], False),
+        (["snakemake", "--dry-run"], False),
+        (["snakemake", "--lint"], False),
+        (["snakemake", "--report", "results/report.html", "all"], False),
+        (["snakemake", "-l"], False),
+        (["snakemake", "--summary"], False),
+        (["snakemake", "-c2", "--rulegraph", "dot", "all"], False),
+        (["snakemake", "-c2", "all", "--", "-n"], True),  # after --, only targets
+    ],
+)
+def test_only_calls_that_run_jobs_touch_the_cache(argv, runs):
+    assert executes(argv) is runs
 
 
 def test_csv_check_detects_truncation(tmp_path):

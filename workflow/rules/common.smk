@@ -12,7 +12,12 @@ os.environ.update(
 
 from signorini.paper import FIGURE3_NORMS, TABLE1_NORMS, TABLE2_NORMS
 from signorini.pipeline import paths
-from signorini.pipeline.cache import cached_artifacts, quarantine_corrupt
+from signorini.pipeline.cache import (
+    cached_artifacts,
+    executes,
+    quarantine_corrupt,
+    warn_corrupt,
+)
 from signorini.pipeline.codedeps import code_inputs
 from signorini.pipeline.config import check_config
 from signorini.studies.stability import atlas as stab_atlas
@@ -27,9 +32,13 @@ for _name, _scene in config["scenes"].items():
         wp_study.check_study(config["scenes"], _name)
 
 # A cached artifact damaged after it was written (truncated npz, incomplete JSON) is moved
-# to <name>.corrupt before Snakemake inspects any file, so that it is rebuilt, not read.
+# to <name>.corrupt before Snakemake inspects any file, so that it is rebuilt, not read; a
+# read-only call (-n, --lint, --report, -l, --summary, ...) only names it.
 if workflow.is_main_process:
-    quarantine_corrupt(cached_artifacts("results", config["scenes"]))
+    if executes(sys.argv):
+        quarantine_corrupt(cached_artifacts("results", config["scenes"]))
+    else:
+        warn_corrupt(cached_artifacts("results", config["scenes"]))
 
 
 wildcard_constraints:

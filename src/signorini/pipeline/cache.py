@@ -2,7 +2,9 @@
 
 A cached artifact damaged after it was written (a truncated ``.npz``, an incomplete JSON, a
 cut-off ``errors.csv``) is moved to ``<name>.corrupt`` by ``quarantine_corrupt``, so that
-Snakemake rebuilds it when a job needs it instead of handing it to the next stage.
+Snakemake rebuilds it when a job needs it instead of handing it to the next stage.  Only a
+Snakemake call that runs jobs moves anything (``executes``): a dry run, ``--lint``, ``--report``,
+``-l`` or ``--summary`` names the damaged artifacts (``warn_corrupt``) and leaves the cache as it is.
 """
 
 from __future__ import annotations
@@ -10,6 +12,7 @@ from __future__ import annotations
 import csv
 import io
 import os
+import re
 import sys
 from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
@@ -52,6 +55,72 @@ def artifact_ok(path: str | os.PathLike) -> bool:
     return True
 
 
+# Snakemake options after which a call only plans, lists, lints or reports
+READ_ONLY_OPTIONS = frozenset(
+    {
+        "--dry-run",
+        "--dryrun",
+        "--lint",
+        "--report",
+        "--list-rules",
+        "--list",
+        "--list-target-rules",
+        "--lt",
+        "--summary",
+        "--detailed-summary",
+        "--dag",
+        "--rulegraph",
+        "--filegraph",
+        "--d3dag",
+        "--list-changes",
+        "--lc",
+        "--list-input-changes",
+        "--li",
+        "--list-params-changes",
+        "--lp",
+        "--list-untracked",
+        "--lu",
+        "--print-compilation",
+        "--unlock",
+        "--containerize",
+        "--export-cwl",
+        "--generate-unit-tests",
+        "--archive",
+        "--cleanup-metadata",
+        "--help",
+        "--version",
+    }
+)
+READ_ONLY_SHORT = frozenset("nlSDhv")  # -n, -l, -S, -D, -h, -v, also in clusters such as -np
+
+
+def executes(argv: list[str]) -> bool:
+    """Whether a Snakemake command line (``sys.argv``) runs jobs, i.e. is none of the read-only calls."""
+    for arg in argv[1:]:
+        if arg == "--":
+            break
+        if arg.split("=", 1)[0] in READ_ONLY_OPTIONS:
+            return False
+        if re.fullmatch(r"-[A-Za-z]+", arg) and READ_ONLY_SHORT & set(arg[1:]):
+            return False
+    return True
+
+
+def corrupt_artifacts(paths: Iterable[str | os.PathLike]) -> list[str]:
+    """The existing but damaged artifacts among ``paths``."""
+    return [str(path) for path in paths if not artifact_ok(path)]
+
+
+def warn_corrupt(paths: Iterable[str | os.PathLike]) -> list[str]:
+    """Name every damaged artifact among ``paths`` on stderr, touching nothing (read-only calls)."""
+    damaged = corrupt_artifacts(paths)
+    for path in damaged:
+        print(
+            f"signorini: damaged artifact {path}; a run that needs it moves it aside and rebuilds it", file=sys.stderr
+        )
+    return damaged
+
+
 def quarantine_corrupt(paths: Iterable[str | os.PathLike]) -> list[str]:
     """Move every existing but corrupt artifact among ``paths`` to ``<name>.corrupt``.
 
@@ -62,13 +131,12 @@ def quarantine_corrupt(paths: Iterable[str | os.PathLike]) -> list[str]:
     valid: they were computed before the damage (it was written atomically and checked
     when read).
     """
-    moved = []
-    for path in paths:
-        if not artifact_ok(path):
-            target = f"{path}.corrupt"
-            os.replace(path, target)
-            print(f"signorini: corrupt artifact {path} moved to {target}; rebuilt when a job needs it", file=sys.stderr)
-            moved.append(str(path))
+    moved = corrupt_artifacts(paths)
+    for path in moved:
+        os.replace(path, f"{path}.corrupt")
+        print(
+            f"signorini: corrupt artifact {path} moved to {path}.corrupt; rebuilt when a job needs it", file=sys.stderr
+        )
     return moved
 
 
