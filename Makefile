@@ -7,6 +7,14 @@ UV_VERSION := 0.13.8
 # uv gives up compiling a file after 60 s, which a heavily loaded 2-core machine can exceed
 export UV_COMPILE_BYTECODE_TIMEOUT ?= 600
 CORES ?= 2
+# any Python >= 3.11 with venv, e.g. PYTHON=/usr/bin/python3 (a PEP 668 system interpreter is fine:
+# nothing is installed into it)
+PYTHON ?= python3
+# an installed uv is used as it is; without one, uv $(UV_VERSION) goes into a private venv (.tools)
+UV ?= $(shell command -v uv 2>/dev/null)
+FIND_UV = uv="$(UV)"; if [ -z "$$uv" ]; then \
+	[ -x .tools/bin/uv ] || { "$(PYTHON)" -m venv .tools && .tools/bin/pip install --quiet uv==$(UV_VERSION); } || exit 1; \
+	uv=.tools/bin/uv; fi
 
 .PHONY: setup all test lock lint dag bench report clean-corrupt clean-results
 
@@ -14,10 +22,10 @@ CORES ?= 2
 setup: $(STAMP)
 
 $(STAMP): environment.lock pyproject.toml
-	python3 -m pip install --quiet uv==$(UV_VERSION)
-	python3 -m uv venv --allow-existing $(VENV)
-	python3 -m uv pip sync --python $(BIN)/python --require-hashes --compile-bytecode environment.lock
-	python3 -m uv pip install --python $(BIN)/python --no-deps --compile-bytecode -e .
+	@$(FIND_UV); set -x; \
+	$$uv venv --allow-existing --python "$(PYTHON)" $(VENV) && \
+	$$uv pip sync --python $(BIN)/python --require-hashes --compile-bytecode environment.lock && \
+	$$uv pip install --python $(BIN)/python --no-deps --compile-bytecode -e . && \
 	touch $@
 
 ## all: set up, then run the whole pipeline (paper scene -> paper_figures/)
@@ -30,8 +38,7 @@ test: setup
 
 ## lock: recompile environment.lock from requirements.in (pinned, with hashes)
 lock:
-	python3 -m pip install --quiet uv==$(UV_VERSION)
-	python3 -m uv pip compile --python-version 3.11 --generate-hashes requirements.in -o environment.lock
+	@$(FIND_UV); $$uv pip compile --python-version 3.11 --generate-hashes requirements.in -o environment.lock
 
 ## lint: ruff, snakemake --lint, snakefmt --check
 lint: setup

@@ -243,3 +243,12 @@ def test_jobs_ran_only_modules_they_declare(edit_matrix):
         assert set(loaded) <= declared, f"{job['rule']} ran undeclared {sorted(set(loaded) - declared)}"
         checked += 1
     assert checked > 50
+
+
+def test_the_package_version_is_the_project_version():
+    import tomllib
+
+    import signorini
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    assert signorini.__version__ == project["version"]
