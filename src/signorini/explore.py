@@ -342,8 +342,8 @@ class _Collect(logging.Handler):
 
 def active_set_history(disc, **options):
     """Solve ``disc`` with the active-set solver and return ``(result, history)``: one row per
-    Newton step (active nodes, changes, factorisations and low-rank correction columns so far), read from the
-    solver's own DEBUG log messages (``signorini.solvers.active_set``)."""
+    Newton step (active nodes, changes, factorisations and low-rank correction columns so far, elapsed
+    time), read from the solver's own progress messages (``signorini.solvers.active_set``)."""
     import pandas as pd
 
     from signorini.fem.solve import solve_discrete
@@ -359,8 +359,8 @@ def active_set_history(disc, **options):
         logger.setLevel(old_level)
     rows: list[dict] = []
     for rec in handler.records:
-        if rec.msg.startswith("iteration") and len(rec.args) == 5:
-            it, active, changes, factorizations, columns = rec.args
+        if rec.msg.startswith("iteration") and len(rec.args) == 6:
+            it, active, changes, factorizations, columns, elapsed = rec.args
             if int(it) == 1:  # a new solve (the warm-start cascade solves coarser meshes first)
                 rows = []
             rows.append(
@@ -370,6 +370,7 @@ def active_set_history(disc, **options):
                     "changes": int(changes),
                     "factorizations": int(factorizations),
                     "correction_columns": int(columns),
+                    "elapsed_s": float(elapsed),
                 }
             )
     return result, pd.DataFrame(rows)

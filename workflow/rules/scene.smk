@@ -121,3 +121,21 @@ rule eoc:
         "../envs/signorini.yaml"
     script:
         "../scripts/eoc.py"
+
+
+rule vtk:
+    """One solution as results/<scene>/N<N>/solution.vtu for ParaView (opt-in, not part of all)."""
+    input:
+        solution=rules.solve.output.npz,
+        code=code("vtk"),
+    output:
+        vtu=PATHS["solution_vtu"],
+    log:
+        paths.log("mesh", "vtk"),
+    conda:
+        "../envs/signorini.yaml"
+    params:
+        problem=scene_param("problem"),
+        diagonal=scene_param("diagonal"),
+    script:
+        "../scripts/vtk.py"

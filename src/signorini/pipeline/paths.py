@@ -20,6 +20,7 @@ PATHS = {
     "system_json": f"{_MESH}/system.json",
     "solution_npz": f"{_MESH}/solution.npz",
     "solution_json": f"{_MESH}/solution.json",
+    "solution_vtu": f"{_MESH}/solution.vtu",
     "norm_json": f"{_MESH}/norms/{{norm}}.json",
     "errors_csv": "results/{scene}/errors.csv",
     "eoc_csv": "results/{scene}/eoc.csv",

@@ -209,13 +209,14 @@ def active_set_solve(
             if frontier.any():
                 grow = frontier
         new_active = keep | grow
-        log.debug(
-            "iteration %d: %d active, %d changes, factorized=%s columns=%d",
+        log.info(  # progress of long solves: one line per Newton step
+            "iteration %d: %d active, %d changes, factorized=%s columns=%d, %.2f s",
             it,
             active.sum(),
             np.count_nonzero(new_active != active),
             n_factor,
             n_columns + len(bordered.columns),
+            time.perf_counter() - t0,
         )
         if np.array_equal(new_active, active):
             break

@@ -1,0 +1,10 @@
+"""rule vtk: results/<scene>/N<N>/solution.vtu (u_h, u, error, λ, contact set) for ParaView."""
+
+from signorini.pipeline.joblog import job_log
+from signorini.studies.scene.export import vtk_stage
+from signorini.studies.scene.store import SceneMesh
+
+snakemake = globals()["snakemake"]  # injected by the script: directive
+
+with job_log(snakemake.log[0]):
+    vtk_stage(SceneMesh.of_job(snakemake), snakemake.input.solution, snakemake.output.vtu)
