@@ -19,7 +19,7 @@ Keys (seconds unless noted):
   for L4, L16, Linf, W14, W116, W1inf, H12
 - ``peak_rss_mib``        ``getrusage(RUSAGE_SELF).ru_maxrss`` at the end (and after each stage)
 
-plus the ratios the issue sets targets for (active set ≤ 3× one factorisation, ≥ 20× faster than
+plus the ratios the project sets targets for (active set ≤ 3× one factorisation, ≥ 20× faster than
 CLARABEL, b + norms ≤ 10 s), the machine and the package versions.  The JSON is written atomically.
 """
 
@@ -241,7 +241,7 @@ def run(args: argparse.Namespace) -> dict:
                 log.error("CLARABEL failed: %s", out["cvxpy_clarabel_error"])
             stage_rss["cvxpy_clarabel"] = peak_rss_mib()
 
-        # --- ratios against the issue's targets -----------------------------------------
+        # --- ratios against the project's targets -----------------------------------------
         fact, solve_s, clar_s = out["factorization_s"], out["active_set_solve_s"], out.get("cvxpy_clarabel_s")
         out["active_set_over_factorization"] = solve_s / fact
         out["clarabel_over_active_set"] = clar_s / solve_s if clar_s else None
