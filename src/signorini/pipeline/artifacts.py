@@ -23,11 +23,18 @@ class CorruptArtifactError(RuntimeError):
     """A cached artifact is unreadable, truncated or fails its checksum."""
 
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def _atomic_write(path: str | os.PathLike, write) -> None:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp creates 0600; a plain open() would follow the umask
         with os.fdopen(fd, "wb") as fh:
             write(fh)
             fh.flush()

@@ -11,35 +11,51 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 import os
 import re
 import sys
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz
 
 
-def _csv_ok(path: Path) -> bool:
+def _csv_ok(path: Path, rows_expected: Sequence[str] | None = None) -> bool:
     """A complete table CSV: ends with a newline, every row has the header's number of
-    fields, no empty cell except ``h`` in the ``regression`` row of ``eoc.csv``."""
+    fields, no empty cell except ``h`` in the ``regression`` row of ``eoc.csv``, finite numbers
+    (and, in ``errors.csv``, non-negative ones); with ``rows_expected`` exactly these ``N`` labels
+    in this order."""
     text = path.read_text()
     if not text.endswith("\n"):
         return False
     rows = list(csv.reader(io.StringIO(text)))
     if len(rows) < 2 or rows[0][:2] != ["N", "h"]:
         return False
+    if rows_expected is not None and [row[0] for row in rows[1:]] != list(rows_expected):
+        return False
     for row in rows[1:]:
         if len(row) != len(rows[0]):
             return False
-        if any(cell == "" for i, cell in enumerate(row) if not (i == 1 and row[0] == "regression")):
+        cells = [cell for i, cell in enumerate(row[1:], 1) if not (i == 1 and row[0] == "regression")]
+        try:
+            values = [float(cell) for cell in cells]
+        except ValueError:
+            return False
+        if not all(math.isfinite(v) and (v >= 0.0 or path.name != "errors.csv") for v in values):
             return False
     return path.name != "eoc.csv" or rows[-1][0] == "regression"
 
 
-def artifact_ok(path: str | os.PathLike) -> bool:
+def expected_rows(path: Path, scene_N: Sequence[int]) -> list[str] | None:
+    """The ``N`` labels ``errors.csv`` / ``eoc.csv`` of a scene with meshes ``scene_N`` must hold."""
+    labels = [str(N) for N in scene_N]
+    return {"errors.csv": labels, "eoc.csv": [*labels[1:], "regression"]}.get(path.name)
+
+
+def artifact_ok(path: str | os.PathLike, rows_expected: Sequence[str] | None = None) -> bool:
     """True unless ``path`` exists and fails its check (npz checksum, JSON completeness
-    marker, complete rows of ``errors.csv``/``eoc.csv``)."""
+    marker, complete rows of ``errors.csv``/``eoc.csv``, with ``rows_expected``: exactly those ``N``)."""
     path = Path(path)
     if not path.exists():
         return True
@@ -49,7 +65,7 @@ def artifact_ok(path: str | os.PathLike) -> bool:
         elif path.suffix == ".json":
             load_json(path)
         elif path.suffix == ".csv":
-            return _csv_ok(path)
+            return _csv_ok(path, rows_expected)
     except (CorruptArtifactError, OSError, UnicodeDecodeError, csv.Error):
         return False
     return True
@@ -106,9 +122,11 @@ def executes(argv: list[str]) -> bool:
     return True
 
 
-def corrupt_artifacts(paths: Iterable[str | os.PathLike]) -> list[str]:
-    """The existing but damaged artifacts among ``paths``."""
-    return [str(path) for path in paths if not artifact_ok(path)]
+def corrupt_artifacts(paths: Iterable) -> list[str]:
+    """The existing but damaged artifacts among ``paths`` (a path, or a pair of a table's path and
+    the ``N`` labels it must hold, as ``cached_artifacts`` yields them)."""
+    checks = [item if isinstance(item, tuple) else (item, None) for item in paths]
+    return [str(path) for path, rows in checks if not artifact_ok(path, rows)]
 
 
 def warn_corrupt(paths: Iterable[str | os.PathLike]) -> list[str]:
@@ -140,16 +158,18 @@ def quarantine_corrupt(paths: Iterable[str | os.PathLike]) -> list[str]:
     return moved
 
 
-def cached_artifacts(root: str | os.PathLike, scenes: Mapping[str, Mapping]) -> Iterator[Path]:
+def cached_artifacts(root: str | os.PathLike, scenes: Mapping[str, Mapping]) -> Iterator[Path | tuple]:
     """The checkable cached artifacts (``.npz``, ``.json``, ``errors.csv``, ``eoc.csv``) of the
-    given scenes under ``root`` (the results directory), atlas cases included."""
-    for scene in scenes:
+    given scenes under ``root`` (the results directory), atlas cases included; the two tables
+    come with the ``N`` labels they must hold (``expected_rows``)."""
+    for scene, block in scenes.items():
         base = Path(root) / scene
         yield from base.glob("*.npz")
-        yield from (base / name for name in ("errors.csv", "eoc.csv"))
+        for table in (base / "errors.csv", base / "eoc.csv"):
+            yield table, expected_rows(table, block.get("N", []))
         yield from base.glob("N*/system.*")
         yield from base.glob("N*/solution.*")
         yield from base.glob("N*/norms/*.json")
-        if "atlas" in scenes[scene]:
+        if "atlas" in block:
             yield from base.glob("atlas/*.json")
             yield from base.glob("atlas/*.npz")

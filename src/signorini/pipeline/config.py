@@ -50,9 +50,14 @@ def check_config(config: Mapping) -> None:
         _check_N(where, scene.get("N", []))
         _check_norms(where, scene.get("norms", []))
         try:
-            Problem(**scene.get("problem", {}))
+            problem = Problem(**scene.get("problem", {}))
         except (ProblemParameterError, TypeError) as err:
             raise ConfigError(f"{where}.problem: {err}") from None
+        if problem.A == 0.0:
+            raise ConfigError(
+                f"{where}.problem.A: 0 makes u ≡ 0 and every error vanish, so no order of convergence exists"
+                " (the stability atlas covers f ≡ 0 as a case)"
+            )
         try:
             Conventions(**scene.get("conventions", {}))
         except (ValueError, TypeError) as err:

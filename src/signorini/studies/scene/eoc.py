@@ -22,10 +22,15 @@ def eoc_stage(errors_csv: str | os.PathLike, out_csv: str | os.PathLike) -> None
     h = err["h"].to_numpy(dtype=float)
     if np.isnan(err[norms].to_numpy(dtype=float)).any():
         raise CorruptArtifactError(f"{errors_csv}: missing values")
+    if len(h) < 2:
+        raise ValueError(f"{errors_csv}: orders of convergence need at least two meshes, the scene has {len(h)}")
     rows = pd.DataFrame({"N": err["N"].iloc[1:].to_list(), "h": h[1:]})
     regr: dict[str, object] = {"N": "regression", "h": math.nan}
     for name in norms:
         e = err[name].to_numpy(dtype=float)
+        if not np.all(e > 0.0):
+            where = err["N"][e <= 0].tolist()
+            raise ValueError(f"{errors_csv}: the {name} error vanishes on a mesh (N = {where}): no EOC")
         rows[name] = eoc(h, e)[1:]
-        regr[name] = regression_slope(h, e) if len(h) >= 2 else math.nan
+        regr[name] = regression_slope(h, e)
     atomic_write_csv(pd.concat([rows, pd.DataFrame([regr])], ignore_index=True), out_csv)

@@ -4,6 +4,7 @@ computes only the norms it needs."""
 from __future__ import annotations
 
 import logging
+import math
 import os
 import time
 from collections.abc import Mapping
@@ -27,6 +28,8 @@ def norm_stage(
     t1 = time.perf_counter()
     value = evaluate_norms(at.problem, mesh, u_h, [norm], conv)[norm]  # chunked: bounded memory
     t2 = time.perf_counter()
+    if not math.isfinite(value) or value < 0.0:
+        raise ValueError(f"N={N} {norm} = {value}: not a finite non-negative number (overflow or NaN in u - u_h)")
     log.info("N=%d %s = %.6e (mesh %.2f s, norm %.3f s)", N, norm, value, t1 - t0, t2 - t1)
     info = {
         "N": N,

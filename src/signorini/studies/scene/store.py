@@ -86,7 +86,10 @@ def read_norm(path: str | os.PathLike, norm: str, N: int) -> float:
     art = load_json(path)
     if art.get("norm") != norm or int(art.get("N", -1)) != int(N):
         raise CorruptArtifactError(f"{path}: holds {art.get('norm')} at N={art.get('N')}, not {norm} at N={N}")
-    return float(art["value"])
+    value = float(art["value"])
+    if not np.isfinite(value) or value < 0.0:
+        raise CorruptArtifactError(f"{path}: {norm} = {value} is not a finite non-negative number")
+    return value
 
 
 def read_errors(scene_N: Sequence[int], norm_jsons: Mapping[str, Sequence[str | os.PathLike]]) -> pd.DataFrame:

@@ -1,0 +1,101 @@
+"""Faults that must never end in a wrong table with exit code 0: non-finite or negative norm
+values, tables that lost a row, a scene whose errors vanish, artifacts unreadable by others."""
+
+from __future__ import annotations
+
+import os
+import stat
+
+import numpy as np
+import pytest
+import yaml
+from helpers import PROBLEM, ROOT
+
+from signorini.pipeline.artifacts import CorruptArtifactError, load_json, save_json
+from signorini.pipeline.cache import artifact_ok, cached_artifacts, corrupt_artifacts, quarantine_corrupt
+from signorini.pipeline.config import ConfigError, check_config
+from signorini.studies.scene.discretise import discretise_stage
+from signorini.studies.scene.eoc import eoc_stage
+from signorini.studies.scene.norm import norm_stage
+from signorini.studies.scene.solve import solve_stage
+from signorini.studies.scene.store import SceneMesh, read_errors
+
+ERRORS = "N,h,L4\n11,0.0909,0.04\n21,0.0476,0.012\n41,0.0244,0.0035\n"
+EOC = "N,h,L4\n21,0.0476,1.8\n41,0.0244,1.9\nregression,,1.85\n"
+
+
+@pytest.fixture(scope="module")
+def solved(tmp_path_factory):
+    d = tmp_path_factory.mktemp("faults")
+    at = SceneMesh(PROBLEM, 8, "sw_ne")
+    discretise_stage(at, d / "system.npz", d / "system.json")
+    solve_stage(at, d / "system.npz", "active_set", d / "solution.npz", d / "solution.json")
+    return d, at
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, -1.0])
+def test_a_non_finite_norm_value_fails_the_norm_job(solved, monkeypatch, tmp_path, bad):
+    import signorini.studies.scene.norm as stage
+
+    d, at = solved
+    monkeypatch.setattr(stage, "evaluate_norms", lambda *args, **kwargs: {"L4": bad})
+    with pytest.raises(ValueError, match="not a finite non-negative number"):
+        norm_stage(at, d / "solution.npz", "L4", tmp_path / "L4.json", {})
+    assert not (tmp_path / "L4.json").exists()
+
+
+def test_a_nan_norm_artifact_never_reaches_a_table(solved, tmp_path):
+    d, at = solved
+    norm_stage(at, d / "solution.npz", "L4", tmp_path / "L4.json", {})
+    art = load_json(tmp_path / "L4.json")
+    save_json(tmp_path / "L4.json", {**art, "value": float("nan")})  # a well-formed artifact with NaN
+    with pytest.raises(CorruptArtifactError, match="not a finite non-negative number"):
+        read_errors([8], {"L4": [tmp_path / "L4.json"]})
+
+
+@pytest.mark.parametrize("table, text", [("errors.csv", ERRORS), ("eoc.csv", EOC)])
+def test_a_table_that_lost_a_row_is_caught(tmp_path, table, text):
+    scene = {"N": [11, 21, 41]}
+    path = tmp_path / "s" / table
+    path.parent.mkdir()
+    path.write_text(text)
+    assert not corrupt_artifacts(cached_artifacts(tmp_path, {"s": scene}))
+    lines = text.splitlines(keepends=True)
+    path.write_text("".join(lines[:2] + lines[3:]))  # sed -i '3d': a complete-looking table without one N
+    assert artifact_ok(path)  # every row is well formed ...
+    assert corrupt_artifacts(cached_artifacts(tmp_path, {"s": scene})) == [str(path)]  # ... but an N is missing
+    assert quarantine_corrupt(cached_artifacts(tmp_path, {"s": scene})) == [str(path)]
+    assert (tmp_path / "s" / f"{table}.corrupt").exists()
+
+
+@pytest.mark.parametrize("value", ["nan", "inf", "-0.5"])
+def test_a_table_with_a_non_finite_or_negative_error_is_caught(tmp_path, value):
+    path = tmp_path / "errors.csv"
+    path.write_text(ERRORS.replace("0.012", value))
+    assert not artifact_ok(path, ["11", "21", "41"])
+
+
+def test_a_vanishing_error_or_a_single_mesh_stops_the_eoc_job(tmp_path):
+    (tmp_path / "errors.csv").write_text(ERRORS.replace("0.012", "0.0"))
+    with pytest.raises(ValueError, match="L4 error vanishes"):
+        eoc_stage(tmp_path / "errors.csv", tmp_path / "eoc.csv")
+    (tmp_path / "errors.csv").write_text("N,h,L4\n11,0.0909,0.04\n")
+    with pytest.raises(ValueError, match="at least two meshes"):
+        eoc_stage(tmp_path / "errors.csv", tmp_path / "eoc.csv")
+    assert not (tmp_path / "eoc.csv").exists()
+
+
+def test_a_scene_whose_errors_vanish_is_rejected():
+    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config["scenes"]["smoke"]["problem"] = {**PROBLEM, "A": 0}
+    with pytest.raises(ConfigError, match=r"scenes\.smoke\.problem\.A: 0 makes u ≡ 0"):
+        check_config(config)
+
+
+def test_artifacts_follow_the_umask(tmp_path):
+    old = os.umask(0o022)
+    try:
+        save_json(tmp_path / "a.json", {"x": 1})
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE((tmp_path / "a.json").stat().st_mode) == 0o644
