@@ -99,3 +99,31 @@ def test_artifacts_follow_the_umask(tmp_path):
     finally:
         os.umask(old)
     assert stat.S_IMODE((tmp_path / "a.json").stat().st_mode) == 0o644
+
+
+@pytest.mark.parametrize(
+    ("N", "limit", "message"),
+    [
+        (10_000_000, None, r"N\[1\]: N = 10000000 needs about .* GB for its solve job"),
+        (30_000, None, r"N\[1\]: N = 30000 needs about 1758.3 GB"),
+        (1001, 1000, r"N\[1\]: N = 1001 needs about 2.4 GB .* more than the 1.0 GB available"),
+    ],
+)
+def test_a_mesh_that_cannot_fit_is_refused_before_any_job(N, limit, message):
+    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config = {"figures_scene": "smoke", "scenes": {"smoke": {**config["scenes"]["smoke"], "N": [11, N]}}}
+    with pytest.raises(ConfigError, match=message):
+        check_config(config, limit)
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [({"max_iters": 5}, "max_iters: not an option of active_set_solve"), ({"max_iter": "5"}, "is not of type int")],
+)
+def test_unknown_or_mistyped_solver_options_are_refused(options, message):
+    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config["scenes"]["smoke"]["solver_options"] = options
+    with pytest.raises(ConfigError, match=message):
+        check_config(config)
+    config["scenes"]["smoke"]["solver_options"] = {"max_iter": 50, "kkt_tol": 1e-11}
+    check_config(config)

@@ -11,7 +11,7 @@ os.environ.update(
 )
 
 from signorini.paper import FIGURE3_NORMS, TABLE1_NORMS, TABLE2_NORMS
-from signorini.pipeline import paths
+from signorini.pipeline import paths, resources
 from signorini.pipeline.cache import (
     cached_artifacts,
     executes,
@@ -24,7 +24,10 @@ from signorini.studies.stability import atlas as stab_atlas
 from signorini.studies.work_precision import study as wp_study
 
 # integer N, norm names of the grammar, admissible problem parameters
-check_config(config)
+_mem_limit = getattr(workflow, "global_resources", {}).get(
+    "mem_mb"
+)  # --resources / profile
+check_config(config, getattr(_mem_limit, "value", _mem_limit))
 # atlas blocks: case names, groups, problems, solver columns
 stab_atlas.check_atlases(config)
 for _name, _scene in config["scenes"].items():

@@ -18,8 +18,8 @@ rule discretise:
     conda:
         "../envs/signorini.yaml"
     resources:
-        mem_mb=lambda wc: 500 + int(wc.N) ** 2 // 1000,  # measured: 3.7 GB at N = 2001
-        runtime=lambda wc: 5 + int(wc.N) ** 2 // 20000,
+        mem_mb=lambda wc: resources.mem_mb("discretise", wc.N),
+        runtime=lambda wc: resources.runtime_min("discretise", wc.N),
     params:
         problem=scene_param("problem"),
         diagonal=scene_param("diagonal"),
@@ -43,8 +43,8 @@ rule solve:
     conda:
         "../envs/signorini.yaml"
     resources:
-        mem_mb=lambda wc: 500 + int(wc.N) ** 2 // 500,  # measured: 7.5 GB at N = 2001
-        runtime=lambda wc: 5 + int(wc.N) ** 2 // 20000,
+        mem_mb=lambda wc: resources.mem_mb("solve", wc.N),
+        runtime=lambda wc: resources.runtime_min("solve", wc.N),
     params:
         problem=scene_param("problem"),
         diagonal=scene_param("diagonal"),
@@ -68,8 +68,8 @@ rule norm:
     conda:
         "../envs/signorini.yaml"
     resources:
-        mem_mb=lambda wc: 500 + int(wc.N) ** 2 // 2000,  # measured: 0.4 GB at N = 1001
-        runtime=lambda wc: 5 + int(wc.N) ** 2 // 50000,
+        mem_mb=lambda wc: resources.mem_mb("norm", wc.N),
+        runtime=lambda wc: resources.runtime_min("norm", wc.N),
     params:
         problem=scene_param("problem"),
         diagonal=scene_param("diagonal"),

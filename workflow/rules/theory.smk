@@ -17,8 +17,8 @@ rule theory_quantities:
     conda:
         "../envs/signorini.yaml"
     resources:
-        mem_mb=lambda wc: 1000 + int(wc.N) ** 2 // 500,  # 4.7 GB at N = 1001 before chunking
-        runtime=lambda wc: 5 + int(wc.N) ** 2 // 50000,
+        mem_mb=lambda wc: resources.mem_mb("theory_quantities", wc.N),
+        runtime=lambda wc: resources.runtime_min("theory_quantities", wc.N),
     params:
         problem=scene_param("problem"),
         diagonal=scene_param("diagonal"),

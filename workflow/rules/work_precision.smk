@@ -27,7 +27,7 @@ rule work_precision_measure:
         "../envs/signorini.yaml"
     resources:
         # measured max RSS: 0.6-1.0 GB up to N = 501 (HiGHS at N = 101: 0.9 GB)
-        mem_mb=lambda wc: 1500 + int(wc.N) ** 2 // 250,
+        mem_mb=lambda wc: resources.mem_mb("work_precision_measure", wc.N),
         runtime=lambda wc: 5
         + (len(study_of(wc)["tolerances"]) + 1)
         * int(study_of(wc).get("time_limit_s", 600))

@@ -36,9 +36,48 @@ def _check_norms(where: str, norms: list) -> None:
         raise ConfigError(f"{where}.norms: names must be unique, got {norms}")
 
 
-def check_config(config: Mapping) -> None:
+def _check_memory(where: str, Ns: list, limit_mb: int) -> None:
+    from signorini.pipeline.resources import largest_job
+
+    for i, N in enumerate(Ns):
+        rule, need = largest_job(N)
+        if need > limit_mb:
+            raise ConfigError(
+                f"{where}.N[{i}]: N = {N} needs about {need / 1024:.1f} GB for its {rule} job (estimate from the "
+                f"peaks measured at N = 2001), more than the {limit_mb / 1024:.1f} GB available"
+            )
+
+
+def _check_solver_options(where: str, solver: str, options: Mapping) -> None:
+    """Unknown or mistyped options of the active-set solver, named before any job runs (the cvxpy
+    routes pass unknown keywords on to the QP solver, which names them itself)."""
+    import inspect
+
+    from signorini.solvers import active_set_solve
+
+    if solver != "active_set":
+        return
+    params = inspect.signature(active_set_solve).parameters
+    allowed = {name: p.default for name, p in params.items() if name not in ("A", "b", "constrained")}
+    for key, value in options.items():
+        if key not in allowed:
+            raise ConfigError(
+                f"{where}.solver_options.{key}: not an option of active_set_solve; choose from {sorted(allowed)}"
+            )
+        default = allowed[key]
+        kind = float if isinstance(default, float) else type(default)
+        if default is not None and not isinstance(value, kind if kind is not float else (int, float)):
+            raise ConfigError(f"{where}.solver_options.{key}: {value!r} is not of type {kind.__name__}")
+
+
+def check_config(config: Mapping, mem_limit_mb: int | None = None) -> None:
     """Semantic checks of a schema-valid config: integer ``N`` (not ``101.0``), unique ``N``,
-    norm names of the grammar (``fem.norm_names``), admissible problem parameters and conventions."""
+    norm names of the grammar (``fem.norm_names``), admissible problem parameters and conventions,
+    meshes whose jobs fit into ``mem_limit_mb`` (default: this machine's memory), the active-set
+    solver's options."""
+    from signorini.pipeline.resources import machine_mem_mb
+
+    limit = int(mem_limit_mb) if mem_limit_mb else machine_mem_mb()
     from signorini.fem.norms import Conventions
     from signorini.fem.problem import Problem, ProblemParameterError
 
@@ -48,6 +87,9 @@ def check_config(config: Mapping) -> None:
     for name, scene in scenes.items():
         where = f"scenes.{name}"
         _check_N(where, scene.get("N", []))
+        _check_memory(where, scene.get("N", []), limit)
+        if scene.get("solver_options"):
+            _check_solver_options(where, scene.get("solver", ""), scene["solver_options"])
         _check_norms(where, scene.get("norms", []))
         try:
             problem = Problem(**scene.get("problem", {}))
