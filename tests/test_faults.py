@@ -127,3 +127,37 @@ def test_unknown_or_mistyped_solver_options_are_refused(options, message):
         check_config(config)
     config["scenes"]["smoke"]["solver_options"] = {"max_iter": 50, "kkt_tol": 1e-11}
     check_config(config)
+
+
+def test_a_solution_of_another_problem_is_refused(solved, tmp_path):
+    """A well-formed solution artifact copied over from a scene with another problem (A = 20)."""
+    from signorini.pipeline.artifacts import load_npz, recording, save_npz
+
+    d, at = solved
+    foreign = tmp_path / "solution.npz"
+    with recording({"rule": "solve", "code": "x", "params": {"problem": {**PROBLEM, "A": 20}}}):
+        save_npz(foreign, **load_npz(d / "solution.npz"))
+    with pytest.raises(CorruptArtifactError, match="solves the problem"):
+        norm_stage(at, foreign, "L4", tmp_path / "L4.json", {})
+    assert not (tmp_path / "L4.json").exists()
+
+
+@pytest.mark.slow
+def test_an_edit_during_a_run_is_not_trusted(built_repo, tmp_path):
+    """A norm job that imported the old code but finished after an edit leaves an artifact newer
+    than the edit: modification times call it current, its recorded code digest does not."""
+    from helpers import clone_built, planned, snakemake
+
+    repo = clone_built(built_repo, tmp_path / "repo")
+    module = repo / "src/signorini/fem/norms.py"
+    st = module.stat()
+    module.write_text(module.read_text() + "\n# edited while the norm jobs ran\n")
+    os.utime(module, ns=(st.st_atime_ns, st.st_mtime_ns))  # the jobs' outputs are newer than the edit
+    norm_json = repo / "results/smoke/N21/norms/L4.json"
+    before = norm_json.read_bytes()
+    proc = snakemake(repo, "-n", "results/smoke/errors.csv")  # read-only: named, nothing removed
+    assert "computed by other code" in proc.stderr and norm_json.read_bytes() == before
+    ran = planned(snakemake(repo, "-c2", "results/smoke/errors.csv"))
+    norms = {(wc["N"], wc["norm"]) for rule, wc in ran if rule == "norm" and wc["scene"] == "smoke"}
+    assert len(norms) == 3 * 7 and ("errors", {"scene": "smoke"}) in ran
+    assert not {"discretise", "solve"} & {rule for rule, _ in ran}  # their code did not change

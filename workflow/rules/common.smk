@@ -1,4 +1,5 @@
 # Shared helpers: the package import, config checks, the cache check, scenes and code inputs.
+import functools
 import sys
 from pathlib import Path
 
@@ -12,10 +13,12 @@ os.environ.update(
 
 from signorini.paper import FIGURE3_NORMS, TABLE1_NORMS, TABLE2_NORMS
 from signorini.pipeline import paths, resources
+from signorini.pipeline.artifacts import code_digest
 from signorini.pipeline.cache import (
     cached_artifacts,
     executes,
     quarantine_corrupt,
+    remove_stale,
     warn_corrupt,
 )
 from signorini.pipeline.codedeps import code_inputs
@@ -33,15 +36,6 @@ stab_atlas.check_atlases(config)
 for _name, _scene in config["scenes"].items():
     if "study" in _scene:  # study blocks: reuse of the source scene's artifacts
         wp_study.check_study(config["scenes"], _name)
-
-# A cached artifact damaged after it was written (truncated npz, incomplete JSON) is moved
-# to <name>.corrupt before Snakemake inspects any file, so that it is rebuilt, not read; a
-# read-only call (-n, --lint, --report, -l, --summary, ...) only names it.
-if workflow.is_main_process:
-    if executes(sys.argv):
-        quarantine_corrupt(cached_artifacts("results", config["scenes"]))
-    else:
-        warn_corrupt(cached_artifacts("results", config["scenes"]))
 
 
 wildcard_constraints:
@@ -97,6 +91,12 @@ def reported(outputs, caption, category, subcategory=None):
         )
         for name, path in outputs.items()
     }
+
+
+@functools.cache
+def current_code_digest(rule):
+    """The digest of a rule's code inputs now (what its jobs record at their start)."""
+    return code_digest(code(rule))
 
 
 def norm_jsons(scene, norms):
@@ -202,3 +202,19 @@ def wp_measure_jsons(scene):
 def atlas_of(scene):
     """The parsed atlas of a scene."""
     return stab_atlas.scene_atlas(config, scene)
+
+
+# --- the cache check, before Snakemake inspects any file ---
+
+# A cached artifact damaged after it was written (truncated npz, incomplete JSON) is moved
+# to <name>.corrupt before Snakemake inspects any file, so that it is rebuilt, not read; a
+# read-only call (-n, --lint, --report, -l, --summary, ...) only names it.
+# An artifact whose recorded code digest differs from the current code of its rule (a job that
+# imported the old code finished after an edit) is removed, so that it is rebuilt, not trusted.
+if workflow.is_main_process:
+    _cached = list(cached_artifacts("results", config["scenes"]))
+    if executes(sys.argv):
+        quarantine_corrupt(_cached)
+    else:
+        warn_corrupt(_cached)
+    remove_stale(_cached, current_code_digest, execute=executes(sys.argv))

@@ -5,5 +5,5 @@ from signorini.studies.scene.eoc import eoc_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     eoc_stage(snakemake.input.errors, snakemake.output.csv)

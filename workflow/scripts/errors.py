@@ -5,5 +5,5 @@ from signorini.studies.scene.errors import errors_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     errors_stage(snakemake.params.N, snakemake.params.norm_jsons, snakemake.output.csv)

@@ -5,5 +5,5 @@ from signorini.studies.paper.figures import figure2_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     figure2_stage(snakemake.input.fields[0], snakemake.output.pdf, snakemake.output.png)

@@ -5,6 +5,6 @@ from signorini.studies.paper.figures import figure3_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     p, o = snakemake.params, snakemake.output
     figure3_stage(p.N, p.norm_jsons, o.pdf, o.png)

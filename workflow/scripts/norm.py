@@ -6,6 +6,6 @@ from signorini.studies.scene.store import SceneMesh
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     at, i, o = SceneMesh.of_job(snakemake), snakemake.input, snakemake.output
     norm_stage(at, i.solution, snakemake.wildcards.norm, o.json, snakemake.params.conventions)

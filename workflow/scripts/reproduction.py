@@ -5,6 +5,6 @@ from signorini.studies.paper.reproduction import reproduction_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     i = snakemake.input
     reproduction_stage(i.table1, i.table2, i.paper_table1, i.paper_table2, i.remarks, snakemake.output.md)

@@ -5,5 +5,5 @@ from signorini.studies.paper.runtime import runtime_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     runtime_stage(snakemake.params.jobs, snakemake.output.csv)

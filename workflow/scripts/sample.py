@@ -5,5 +5,5 @@ from signorini.studies.paper.sample import GRID, sample_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     sample_stage(snakemake.params.problem, GRID, snakemake.output.npz)

@@ -6,6 +6,6 @@ from signorini.studies.scene.store import SceneMesh
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     p, o = snakemake.params, snakemake.output
     solve_stage(SceneMesh.of_job(snakemake), snakemake.input.system, p.solver, o.npz, o.json, p.solver_options)

@@ -5,6 +5,6 @@ from signorini.studies.stability.report import atlas_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     p, i = snakemake.params, snakemake.input
     atlas_stage(p.norms, p.solvers, i.jsons, i.npzs, snakemake.output)

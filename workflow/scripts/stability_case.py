@@ -5,5 +5,5 @@ from signorini.studies.stability.cases import case_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     case_stage(snakemake.params.job, snakemake.output.json, snakemake.output.npz)

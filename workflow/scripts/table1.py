@@ -5,5 +5,5 @@ from signorini.studies.paper.tables import table1_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     table1_stage(snakemake.params.N, snakemake.params.norm_jsons, snakemake.output)

@@ -6,5 +6,5 @@ from signorini.studies.theory.quantities import quantities_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     quantities_stage(SceneMesh.of_job(snakemake), snakemake.input.solution, snakemake.output.json)

@@ -5,5 +5,5 @@ from signorini.studies.theory.report import report_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     report_stage(snakemake.input.errors[0], snakemake.input.theory, snakemake.output)

@@ -6,5 +6,5 @@ from signorini.studies.scene.store import SceneMesh
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     vtk_stage(SceneMesh.of_job(snakemake), snakemake.input.solution, snakemake.output.vtu)

@@ -5,5 +5,5 @@ from signorini.studies.work_precision.figures import figures_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     figures_stage(snakemake.input.csv, snakemake.params.figure_N, snakemake.output)

@@ -6,7 +6,7 @@ from signorini.studies.work_precision.measure import measure_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     p, i = snakemake.params, snakemake.input
     inputs = {
         "system": i.system,

@@ -5,6 +5,6 @@ from signorini.studies.work_precision.report import report_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     i = snakemake.input
     report_stage(i.csv, i.paper_table1, i.paper_table2, snakemake.output.md, source=snakemake.params.source)

@@ -5,5 +5,5 @@ from signorini.studies.work_precision.table import table_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
-with job_log(snakemake.log[0]):
+with job_log(snakemake):
     table_stage(snakemake.input.jsons, snakemake.output.csv)

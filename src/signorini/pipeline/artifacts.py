@@ -4,16 +4,23 @@ Every file is written to a temporary sibling and renamed into place, so a
 killed job never leaves a half-written file under the final name.  ``.npz``
 archives carry a ``_checksum`` of their arrays, and JSON files a ``"_complete"``
 marker; a truncated or tampered file raises ``CorruptArtifactError`` on load.
+
+Inside a workflow job (``signorini.pipeline.joblog.job_log``) every artifact also records its
+provenance (``_provenance``): the digest of the code the job ran (its script and the package
+modules it imports, read at job start) and the parameters that define it.  The workflow compares
+the code digest with the current code before planning (``signorini.pipeline.cache``).
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import io
 import json
 import os
 import tempfile
 import zipfile
+from collections.abc import Iterable, Iterator, Mapping
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +28,42 @@ import numpy as np
 
 class CorruptArtifactError(RuntimeError):
     """A cached artifact is unreadable, truncated or fails its checksum."""
+
+
+_PROVENANCE: dict | None = None  # of the running job, recorded in every artifact it writes
+
+
+def code_digest(files: Iterable[str | os.PathLike]) -> str:
+    """SHA-256 over the names and contents of ``files`` (in sorted order): what a job's code was."""
+    h = hashlib.sha256()
+    for name in sorted(str(f) for f in files):
+        h.update(name.encode())
+        h.update(Path(name).read_bytes())
+    return h.hexdigest()
+
+
+@contextlib.contextmanager
+def recording(provenance: Mapping) -> Iterator[None]:
+    """Record ``provenance`` (JSON-ready) in every artifact written inside the block."""
+    global _PROVENANCE
+    old, _PROVENANCE = _PROVENANCE, dict(provenance)
+    try:
+        yield
+    finally:
+        _PROVENANCE = old
+
+
+def provenance_of(path: str | os.PathLike) -> dict | None:
+    """The provenance an artifact records (None for one written outside a workflow job)."""
+    path = Path(path)
+    if path.suffix == ".npz":
+        try:  # only this member is read: the arrays may be large
+            with np.load(path, allow_pickle=False) as data:
+                raw = data["_provenance"] if "_provenance" in data.files else None
+        except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
+            raise CorruptArtifactError(f"{path}: unreadable archive ({err})") from err
+        return None if raw is None else json.loads(raw.tobytes().decode())
+    return load_json(path).get("_provenance")
 
 
 def _umask() -> int:
@@ -59,6 +102,8 @@ def _digest(arrays: dict[str, np.ndarray]) -> str:
 def save_npz(path: str | os.PathLike, **arrays: np.ndarray) -> None:
     """Write arrays atomically with a SHA-256 checksum."""
     arrays = {k: np.asarray(v) for k, v in arrays.items()}
+    if _PROVENANCE is not None:
+        arrays["_provenance"] = np.frombuffer(json.dumps(_PROVENANCE, sort_keys=True).encode(), dtype=np.uint8)
     checksum = np.frombuffer(_digest(arrays).encode(), dtype=np.uint8)
     _atomic_write(path, lambda fh: np.savez(fh, _checksum=checksum, **arrays))
 
@@ -78,7 +123,8 @@ def load_npz(path: str | os.PathLike) -> dict[str, np.ndarray]:
 
 def save_json(path: str | os.PathLike, data: dict) -> None:
     """Write a JSON object atomically with a completeness marker."""
-    text = json.dumps({**data, "_complete": True}, indent=2, sort_keys=True, default=float)
+    extra = {"_provenance": _PROVENANCE} if _PROVENANCE is not None else {}
+    text = json.dumps({**data, **extra, "_complete": True}, indent=2, sort_keys=True, default=float)
     _atomic_write(path, lambda fh: fh.write(text.encode()))
 
 

@@ -15,10 +15,10 @@ import math
 import os
 import re
 import sys
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 
-from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz
+from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz, provenance_of
 
 
 def _csv_ok(path: Path, rows_expected: Sequence[str] | None = None) -> bool:
@@ -53,6 +53,21 @@ def expected_rows(path: Path, scene_N: Sequence[int]) -> list[str] | None:
     return {"errors.csv": labels, "eoc.csv": [*labels[1:], "regression"]}.get(path.name)
 
 
+CHECKSUM_MAX_BYTES = 64 * 2**20  # larger archives (the assembled systems of fine meshes) get a structural check
+
+
+def _zip_complete(path: Path) -> bool:
+    """A large archive is complete if its zip directory lists its checksum (a truncated file has
+    none); the checksum itself is verified by every job that loads it."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as archive:
+            return "_checksum.npy" in archive.namelist()
+    except (OSError, zipfile.BadZipFile):
+        return False
+
+
 def artifact_ok(path: str | os.PathLike, rows_expected: Sequence[str] | None = None) -> bool:
     """True unless ``path`` exists and fails its check (npz checksum, JSON completeness
     marker, complete rows of ``errors.csv``/``eoc.csv``, with ``rows_expected``: exactly those ``N``)."""
@@ -60,6 +75,8 @@ def artifact_ok(path: str | os.PathLike, rows_expected: Sequence[str] | None = N
     if not path.exists():
         return True
     try:
+        if path.suffix == ".npz" and path.stat().st_size > CHECKSUM_MAX_BYTES:
+            return _zip_complete(path)
         if path.suffix == ".npz":
             load_npz(path)
         elif path.suffix == ".json":
@@ -137,6 +154,40 @@ def warn_corrupt(paths: Iterable[str | os.PathLike]) -> list[str]:
             f"signorini: damaged artifact {path}; a run that needs it moves it aside and rebuilds it", file=sys.stderr
         )
     return damaged
+
+
+def stale_artifacts(paths: Iterable, current_code: Callable[[str], str]) -> list[str]:
+    """The artifacts among ``paths`` whose recorded code digest differs from ``current_code(rule)``
+    of the rule that wrote them: written by a job that ran older code (say an edit during the
+    run, which modification times cannot tell)."""
+    stale = []
+    for item in paths:
+        path = Path(item[0] if isinstance(item, tuple) else item)
+        if path.suffix not in (".npz", ".json") or not path.exists():
+            continue
+        try:
+            prov = provenance_of(path)
+        except CorruptArtifactError:
+            continue  # the damage check moves it
+        if prov and prov.get("code") and prov["code"] != current_code(prov["rule"]):
+            stale.append(str(path))
+    return stale
+
+
+def remove_stale(paths: Iterable, current_code: Callable[[str], str], execute: bool) -> list[str]:
+    """Delete the stale artifacts (``stale_artifacts``) and the scene tables computed from them
+    (``errors.csv``, ``eoc.csv`` of the same scene), so that a job that needs one rebuilds it and
+    everything after it reruns, or, in a read-only call (``execute`` false), only name them."""
+    stale = stale_artifacts(paths, current_code)
+    scenes = {Path(path).parents[len(Path(path).parts) - 3] for path in stale}  # results/<scene>/...
+    derived = [str(scene / name) for scene in sorted(scenes) for name in ("errors.csv", "eoc.csv")]
+    stale += [path for path in derived if Path(path).exists()]
+    for path in stale:
+        if execute:
+            os.remove(path)
+        verb = "removed; rebuilt when a job needs it" if execute else "a run that needs it rebuilds it"
+        print(f"signorini: {path} was computed by other code than the current one ({verb})", file=sys.stderr)
+    return stale
 
 
 def quarantine_corrupt(paths: Iterable[str | os.PathLike]) -> list[str]:

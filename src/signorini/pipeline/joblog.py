@@ -3,11 +3,15 @@
 from __future__ import annotations
 
 import contextlib
+import json
 import logging
 import os
 import sys
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
+
+from signorini.pipeline.artifacts import code_digest, recording
 
 log = logging.getLogger("signorini.job")
 MODULES_LINE = "modules run: %s"  # the last line of a job's log file
@@ -18,11 +22,32 @@ def loaded_modules() -> list[str]:
     return sorted(m for m in sys.modules if m == "signorini" or m.startswith("signorini."))
 
 
+def job_provenance(job: Any) -> dict:
+    """What a Snakemake job's artifacts record: its rule, the digest of its code inputs (script and
+    package modules, read now, at job start), its parameters and wildcards."""
+    code = list(getattr(job.input, "code", []))
+
+    def plain(items: Any) -> dict:
+        return json.loads(json.dumps(dict(items), default=str))
+
+    return {
+        "rule": job.rule,
+        "code": code_digest(code),
+        "params": plain(job.params.items()),
+        "wildcards": plain(job.wildcards.items()),
+    }
+
+
 @contextlib.contextmanager
-def job_log(path: str | os.PathLike | None) -> Iterator[logging.Logger]:
+def job_log(job: Any) -> Iterator[logging.Logger]:
     """Log to the job's log file (and stderr); an exception is logged with its traceback, then
-    re-raised.  The log file's last line names the package modules the job ran (``loaded_modules``), which
-    the tests compare with the rule's code inputs."""
+    re-raised.  ``job``: the Snakemake job object of a script (its log file, and the provenance
+    every artifact it writes records: ``job_provenance``), or just a log path (or None).  The log
+    file's last line names the package modules the job ran (``loaded_modules``), which the tests
+    compare with the rule's code inputs."""
+    path, provenance = (
+        (job, None) if job is None or isinstance(job, (str, os.PathLike)) else (job.log[0], job_provenance(job))
+    )
     root = logging.getLogger()
     handlers: list[logging.Handler] = [logging.StreamHandler(sys.stderr)]
     if path:
@@ -37,7 +62,8 @@ def job_log(path: str | os.PathLike | None) -> Iterator[logging.Logger]:
     old_level = pkg.level
     pkg.setLevel(logging.INFO)  # the package's messages; other libraries stay at WARNING
     try:
-        yield log
+        with recording(provenance) if provenance is not None else contextlib.nullcontext():
+            yield log
         record = log.makeRecord(log.name, logging.INFO, __file__, 0, MODULES_LINE, (" ".join(loaded_modules()),), None)
         for handler in file_handlers:  # the log file only: the console stays short
             handler.handle(record)

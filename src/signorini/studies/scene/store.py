@@ -18,7 +18,7 @@ import numpy as np
 
 from signorini.fem.mesh import friedrichs_keller, mesh_width
 from signorini.fem.problem import Problem
-from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz
+from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz, provenance_of
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -52,8 +52,16 @@ class SceneMesh:
         return friedrichs_keller(self.N, self.diagonal)
 
     def load_solution(self, solution_npz: str | os.PathLike) -> np.ndarray:
-        """``u_h`` of this mesh from a solve artifact (``load_solution``)."""
-        return load_solution(solution_npz, self.N, self.diagonal)
+        """``u_h`` of this mesh from a solve artifact (``load_solution``), refused if the job that
+        wrote it solved another problem (its recorded provenance)."""
+        u_h = load_solution(solution_npz, self.N, self.diagonal)
+        recorded = (provenance_of(solution_npz) or {}).get("params", {}).get("problem")
+        if recorded is not None and Problem.from_params(recorded) != self.problem:
+            raise CorruptArtifactError(
+                f"{solution_npz}: solves the problem {Problem.from_params(recorded).as_dict()}, "
+                f"not {self.problem.as_dict()}"
+            )
+        return u_h
 
 
 def load_system(path: str | os.PathLike, N: int | None = None) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
