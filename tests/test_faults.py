@@ -161,3 +161,14 @@ def test_an_edit_during_a_run_is_not_trusted(built_repo, tmp_path):
     norms = {(wc["N"], wc["norm"]) for rule, wc in ran if rule == "norm" and wc["scene"] == "smoke"}
     assert len(norms) == 3 * 7 and ("errors", {"scene": "smoke"}) in ran
     assert not {"discretise", "solve"} & {rule for rule, _ in ran}  # their code did not change
+
+
+def test_a_hand_edited_norm_value_is_caught(solved, tmp_path):
+    d, at = solved
+    path = tmp_path / "L4.json"
+    norm_stage(at, d / "solution.npz", "L4", path, {})
+    value = load_json(path)["value"]
+    path.write_text(path.read_text().replace(repr(value), repr(2 * value)))  # a well-formed edit
+    with pytest.raises(CorruptArtifactError, match="checksum mismatch"):
+        load_json(path)
+    assert not artifact_ok(path)

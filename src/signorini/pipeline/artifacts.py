@@ -2,8 +2,9 @@
 
 Every file is written to a temporary sibling and renamed into place, so a
 killed job never leaves a half-written file under the final name.  ``.npz``
-archives carry a ``_checksum`` of their arrays, and JSON files a ``"_complete"``
-marker; a truncated or tampered file raises ``CorruptArtifactError`` on load.
+archives carry a ``_checksum`` of their arrays, and JSON files a ``"_checksum"`` of their content
+and a ``"_complete"`` marker; a truncated, edited or tampered file raises ``CorruptArtifactError``
+on load.
 
 Inside a workflow job (``signorini.pipeline.joblog.job_log``) every artifact also records its
 provenance (``_provenance``): the digest of the code the job ran (its script and the package
@@ -121,10 +122,16 @@ def load_npz(path: str | os.PathLike) -> dict[str, np.ndarray]:
     return arrays
 
 
+def _json_digest(data: dict) -> str:
+    return hashlib.sha256(json.dumps(data, sort_keys=True, default=float).encode()).hexdigest()
+
+
 def save_json(path: str | os.PathLike, data: dict) -> None:
-    """Write a JSON object atomically with a completeness marker."""
-    extra = {"_provenance": _PROVENANCE} if _PROVENANCE is not None else {}
-    text = json.dumps({**data, **extra, "_complete": True}, indent=2, sort_keys=True, default=float)
+    """Write a JSON object atomically with a SHA-256 checksum of its content and a completeness marker."""
+    payload = json.loads(json.dumps({**data, **({"_provenance": _PROVENANCE} if _PROVENANCE else {})}, default=float))
+    text = json.dumps(
+        {**payload, "_checksum": _json_digest(payload), "_complete": True}, indent=2, sort_keys=True, default=float
+    )
     _atomic_write(path, lambda fh: fh.write(text.encode()))
 
 
@@ -136,6 +143,9 @@ def load_json(path: str | os.PathLike) -> dict:
         raise CorruptArtifactError(f"{path}: unreadable JSON ({err})") from err
     if not isinstance(data, dict) or data.pop("_complete", None) is not True:
         raise CorruptArtifactError(f"{path}: incomplete JSON artifact")
+    checksum = data.pop("_checksum", None)
+    if checksum is not None and checksum != _json_digest(data):
+        raise CorruptArtifactError(f"{path}: checksum mismatch (edited or damaged)")
     return data
 
 

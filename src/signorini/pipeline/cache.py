@@ -221,6 +221,8 @@ def cached_artifacts(root: str | os.PathLike, scenes: Mapping[str, Mapping]) -> 
         yield from base.glob("N*/system.*")
         yield from base.glob("N*/solution.*")
         yield from base.glob("N*/norms/*.json")
+        yield from base.glob("N*/theory.json")
+        yield from base.glob("N*/work_precision/*.json")
         if "atlas" in block:
             yield from base.glob("atlas/*.json")
             yield from base.glob("atlas/*.npz")
