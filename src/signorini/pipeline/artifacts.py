@@ -54,16 +54,21 @@ def recording(provenance: Mapping) -> Iterator[None]:
         _PROVENANCE = old
 
 
+def npz_provenance(arrays: Mapping[str, np.ndarray]) -> dict | None:
+    """The provenance recorded in the arrays of a loaded archive (``load_npz``), or None."""
+    raw = arrays.get("_provenance")
+    return None if raw is None else json.loads(raw.tobytes().decode())
+
+
 def provenance_of(path: str | os.PathLike) -> dict | None:
     """The provenance an artifact records (None for one written outside a workflow job)."""
     path = Path(path)
     if path.suffix == ".npz":
         try:  # only this member is read: the arrays may be large
             with np.load(path, allow_pickle=False) as data:
-                raw = data["_provenance"] if "_provenance" in data.files else None
+                return npz_provenance({"_provenance": data["_provenance"]} if "_provenance" in data.files else {})
         except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
             raise CorruptArtifactError(f"{path}: unreadable archive ({err})") from err
-        return None if raw is None else json.loads(raw.tobytes().decode())
     return load_json(path).get("_provenance")
 
 

@@ -179,7 +179,7 @@ def remove_stale(paths: Iterable, current_code: Callable[[str], str], execute: b
     (``errors.csv``, ``eoc.csv`` of the same scene), so that a job that needs one rebuilds it and
     everything after it reruns, or, in a read-only call (``execute`` false), only name them."""
     stale = stale_artifacts(paths, current_code)
-    scenes = {Path(path).parents[len(Path(path).parts) - 3] for path in stale}  # results/<scene>/...
+    scenes = {Path(*Path(path).parts[:2]) for path in stale}  # results/<scene>/...
     derived = [str(scene / name) for scene in sorted(scenes) for name in ("errors.csv", "eoc.csv")]
     stale += [path for path in derived if Path(path).exists()]
     for path in stale:

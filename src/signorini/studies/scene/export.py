@@ -6,13 +6,11 @@ from __future__ import annotations
 import os
 
 from signorini.export import solution_fields, write_vtu
-from signorini.pipeline.artifacts import load_npz
 from signorini.studies.scene.store import SceneMesh
 
 
 def vtk_stage(at: SceneMesh, solution_npz: str | os.PathLike, out_vtu: str | os.PathLike) -> None:
     """Write the solution of one mesh of a scene as a VTK unstructured grid."""
-    u_h = at.load_solution(solution_npz)
-    sol = load_npz(solution_npz)
+    sol = at.solution(solution_npz)
     mesh = at.mesh()
-    write_vtu(out_vtu, mesh, solution_fields(at.problem, mesh, u_h, sol["lam"], sol["active"]))
+    write_vtu(out_vtu, mesh, solution_fields(at.problem, mesh, sol["u"], sol["lam"], sol["active"]))

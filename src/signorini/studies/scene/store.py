@@ -18,7 +18,7 @@ import numpy as np
 
 from signorini.fem.mesh import friedrichs_keller, mesh_width
 from signorini.fem.problem import Problem
-from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz, provenance_of
+from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz, npz_provenance
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -51,17 +51,27 @@ class SceneMesh:
     def mesh(self) -> MeshTri:
         return friedrichs_keller(self.N, self.diagonal)
 
-    def load_solution(self, solution_npz: str | os.PathLike) -> np.ndarray:
-        """``u_h`` of this mesh from a solve artifact (``load_solution``), refused if the job that
-        wrote it solved another problem (its recorded provenance)."""
-        u_h = load_solution(solution_npz, self.N, self.diagonal)
-        recorded = (provenance_of(solution_npz) or {}).get("params", {}).get("problem")
+    def solution(self, solution_npz: str | os.PathLike) -> dict[str, np.ndarray]:
+        """The arrays of a solve artifact (``u``, ``lam``, ``active``), read once and checked against
+        this mesh: a truncated file, a wrong length, another diagonal or another problem (the one
+        the job that wrote it recorded) raises ``CorruptArtifactError``."""
+        sol = load_npz(solution_npz)
+        u_h, n = sol["u"], (self.N + 1) ** 2
+        if u_h.shape != (n,):
+            raise CorruptArtifactError(f"{solution_npz}: u has shape {u_h.shape}, expected ({n},) for N={self.N}")
+        if "diagonal" in sol and str(sol["diagonal"]) != self.diagonal:
+            raise CorruptArtifactError(f"{solution_npz}: solved with diagonal {sol['diagonal']}, not {self.diagonal}")
+        recorded = (npz_provenance(sol) or {}).get("params", {}).get("problem")
         if recorded is not None and Problem.from_params(recorded) != self.problem:
             raise CorruptArtifactError(
                 f"{solution_npz}: solves the problem {Problem.from_params(recorded).as_dict()}, "
                 f"not {self.problem.as_dict()}"
             )
-        return u_h
+        return sol
+
+    def load_solution(self, solution_npz: str | os.PathLike) -> np.ndarray:
+        """``u_h`` of this mesh from a solve artifact, checked (``solution``)."""
+        return self.solution(solution_npz)["u"]
 
 
 def load_system(path: str | os.PathLike, N: int | None = None) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
@@ -73,20 +83,6 @@ def load_system(path: str | os.PathLike, N: int | None = None) -> tuple[sp.csr_m
         raise CorruptArtifactError(f"{path}: holds the system of N={int(d['N'])}, not N={N}")
     A = sp.csr_matrix((d["data"], d["indices"], d["indptr"]), shape=tuple(int(s) for s in d["shape"]))
     return A, d["b"], d["boundary"]
-
-
-def load_solution(solution_npz: str | os.PathLike, N: int, diagonal: str) -> np.ndarray:
-    """``u_h`` from a solve artifact, checked against the mesh it is used on.
-
-    Raises ``CorruptArtifactError`` for a truncated file, a wrong length or another diagonal.
-    """
-    sol = load_npz(solution_npz)
-    u_h = sol["u"]
-    if u_h.shape != ((N + 1) ** 2,):
-        raise CorruptArtifactError(f"{solution_npz}: u has shape {u_h.shape}, expected ({(N + 1) ** 2},) for N={N}")
-    if "diagonal" in sol and str(sol["diagonal"]) != diagonal:
-        raise CorruptArtifactError(f"{solution_npz}: solved with diagonal {sol['diagonal']}, not {diagonal}")
-    return u_h
 
 
 def read_norm(path: str | os.PathLike, norm: str, N: int) -> float:
