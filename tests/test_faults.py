@@ -172,3 +172,30 @@ def test_a_hand_edited_norm_value_is_caught(solved, tmp_path):
     with pytest.raises(CorruptArtifactError, match="checksum mismatch"):
         load_json(path)
     assert not artifact_ok(path)
+
+
+@pytest.mark.slow
+def test_an_input_replaced_under_its_consumers_is_not_trusted(built_repo, tmp_path, monkeypatch):
+    """A valid ``system.npz`` of other content put in place with the old modification time: the
+    solution computed from the old one is removed and rebuilt, and a job refuses it meanwhile."""
+    from helpers import clone_built, planned, snakemake
+
+    from signorini.pipeline.artifacts import load_npz, npz_provenance, recording, save_npz
+    from signorini.pipeline.joblog import StaleInputError, check_inputs
+
+    repo = clone_built(built_repo, tmp_path / "repo")
+    system = repo / "results/smoke/N21/system.npz"
+    st = system.stat()
+    arrays = load_npz(system)
+    with recording(npz_provenance(arrays)):
+        save_npz(system, **{k: v for k, v in arrays.items() if k != "_provenance"} | {"b": 2 * arrays["b"]})
+    os.utime(system, ns=(st.st_atime_ns, st.st_mtime_ns))  # modification times see no change
+    monkeypatch.chdir(repo)  # provenance names inputs relative to the workflow directory
+    with pytest.raises(StaleInputError, match="computed from another results/smoke/N21/system.npz"):
+        check_inputs(["results/smoke/N21/solution.npz"])
+    proc = snakemake(repo, "-n", "results/smoke/errors.csv")  # read-only: named, nothing removed
+    assert "solution.npz was computed from another results/smoke/N21/system.npz" in proc.stderr
+    ran = planned(snakemake(repo, "-c2", "results/smoke/errors.csv"))
+    assert ("solve", {"scene": "smoke", "N": "21"}) in ran and ("errors", {"scene": "smoke"}) in ran
+    assert "discretise" not in {rule for rule, _ in ran}  # the replaced system is valid: it is used
+    check_inputs(["results/smoke/N21/solution.npz"])

@@ -8,8 +8,11 @@ on load.
 
 Inside a workflow job (``signorini.pipeline.joblog.job_log``) every artifact also records its
 provenance (``_provenance``): the digest of the code the job ran (its script and the package
-modules it imports, read at job start) and the parameters that define it.  The workflow compares
-the code digest with the current code before planning (``signorini.pipeline.cache``).
+modules it imports, read at job start), the parameters that define it and the content digest
+(``content_digest``) of every input artifact it read.  The workflow compares the code digest with
+the current code, and the input digests with the current inputs, before planning
+(``signorini.pipeline.cache``); a job refuses an input computed from other inputs than the ones
+now on disk (``signorini.pipeline.joblog``).
 """
 
 from __future__ import annotations
@@ -70,6 +73,38 @@ def provenance_of(path: str | os.PathLike) -> dict | None:
         except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
             raise CorruptArtifactError(f"{path}: unreadable archive ({err})") from err
     return load_json(path).get("_provenance")
+
+
+def content_digest(path: str | os.PathLike) -> str:
+    """What identifies an artifact's content: the checksum it stores (``.npz``: only that member is
+    read; ``.json``), else the SHA-256 of its bytes (tables, benchmark files)."""
+    path = Path(path)
+    try:
+        if path.suffix == ".npz":
+            with np.load(path, allow_pickle=False) as data:
+                if "_checksum" in data.files:
+                    return data["_checksum"].tobytes().decode()
+        elif path.suffix == ".json":
+            stored = json.loads(path.read_text()).get("_checksum")
+            if isinstance(stored, str):
+                return stored
+        return hashlib.sha256(path.read_bytes()).hexdigest()
+    except (OSError, ValueError, AttributeError, zipfile.BadZipFile, EOFError) as err:
+        raise CorruptArtifactError(f"{path}: unreadable ({err})") from err
+
+
+def changed_input(provenance: dict | None) -> str | None:
+    """The first input recorded in ``provenance`` whose current content differs from the recorded
+    digest (None when all agree; a missing or unreadable input is left to the workflow)."""
+    for path, recorded in ((provenance or {}).get("inputs") or {}).items():
+        if not Path(path).is_file():
+            continue
+        try:
+            if content_digest(path) != recorded:
+                return path
+        except CorruptArtifactError:
+            continue
+    return None
 
 
 def _umask() -> int:

@@ -18,7 +18,7 @@ import sys
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 
-from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz, provenance_of
+from signorini.pipeline.artifacts import CorruptArtifactError, changed_input, load_json, load_npz, provenance_of
 
 
 def _csv_ok(path: Path, rows_expected: Sequence[str] | None = None) -> bool:
@@ -156,22 +156,35 @@ def warn_corrupt(paths: Iterable[str | os.PathLike]) -> list[str]:
     return damaged
 
 
-def stale_artifacts(paths: Iterable, current_code: Callable[[str], str]) -> list[str]:
+def stale_artifacts(paths: Iterable, current_code: Callable[[str], str]) -> list[tuple[str, str]]:
     """The artifacts among ``paths`` whose recorded code digest differs from ``current_code(rule)``
-    of the rule that wrote them: written by a job that ran older code (say an edit during the
-    run, which modification times cannot tell)."""
-    stale = []
+    of the rule that wrote them (a job that ran older code, say an edit during the run, which
+    modification times cannot tell), that were computed from other inputs than the ones now on
+    disk (an input replaced by a copy with an old modification time), or from such an artifact;
+    each with the reason."""
+    recorded: dict[str, dict] = {}
     for item in paths:
         path = Path(item[0] if isinstance(item, tuple) else item)
         if path.suffix not in (".npz", ".json") or not path.exists():
             continue
         try:
-            prov = provenance_of(path)
+            recorded[str(path)] = provenance_of(path) or {}
         except CorruptArtifactError:
             continue  # the damage check moves it
-        if prov and prov.get("code") and prov["code"] != current_code(prov["rule"]):
-            stale.append(str(path))
-    return stale
+    stale: dict[str, str] = {}
+    for path, prov in recorded.items():
+        if prov.get("code") and prov["code"] != current_code(prov["rule"]):
+            stale[path] = "was computed by other code than the current one"
+        elif changed := changed_input(prov):
+            stale[path] = f"was computed from another {changed} than the one now on disk"
+    grown = True
+    while grown:  # and everything computed from a stale artifact
+        grown = False
+        for path, prov in recorded.items():
+            source = next((p for p in prov.get("inputs") or {} if p in stale), None)
+            if path not in stale and source:
+                stale[path], grown = f"was computed from {source}, which is out of date", True
+    return list(stale.items())
 
 
 def remove_stale(paths: Iterable, current_code: Callable[[str], str], execute: bool) -> list[str]:
@@ -179,15 +192,15 @@ def remove_stale(paths: Iterable, current_code: Callable[[str], str], execute: b
     (``errors.csv``, ``eoc.csv`` of the same scene), so that a job that needs one rebuilds it and
     everything after it reruns, or, in a read-only call (``execute`` false), only name them."""
     stale = stale_artifacts(paths, current_code)
-    scenes = {Path(*Path(path).parts[:2]) for path in stale}  # results/<scene>/...
+    scenes = {Path(*Path(path).parts[:2]) for path, _ in stale}  # results/<scene>/...
     derived = [str(scene / name) for scene in sorted(scenes) for name in ("errors.csv", "eoc.csv")]
-    stale += [path for path in derived if Path(path).exists()]
-    for path in stale:
+    stale += [(path, "was derived from a stale artifact of its scene") for path in derived if Path(path).exists()]
+    for path, reason in stale:
         if execute:
             os.remove(path)
         verb = "removed; rebuilt when a job needs it" if execute else "a run that needs it rebuilds it"
-        print(f"signorini: {path} was computed by other code than the current one ({verb})", file=sys.stderr)
-    return stale
+        print(f"signorini: {path} {reason} ({verb})", file=sys.stderr)
+    return [path for path, _ in stale]
 
 
 def quarantine_corrupt(paths: Iterable[str | os.PathLike]) -> list[str]:

@@ -11,7 +11,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from signorini.pipeline.artifacts import code_digest, recording
+from signorini.pipeline.artifacts import changed_input, code_digest, content_digest, provenance_of, recording
 
 log = logging.getLogger("signorini.job")
 MODULES_LINE = "modules run: %s"  # the last line of a job's log file
@@ -22,10 +22,27 @@ def loaded_modules() -> list[str]:
     return sorted(m for m in sys.modules if m == "signorini" or m.startswith("signorini."))
 
 
+class StaleInputError(RuntimeError):
+    """An input artifact was computed from other inputs than the ones now on disk."""
+
+
+def check_inputs(paths: list[str]) -> None:
+    """Refuse an input artifact whose own recorded inputs changed since it was computed (say a
+    ``system.npz`` replaced under a ``solution.npz`` computed from the old one)."""
+    for path in paths:
+        if Path(path).suffix not in (".npz", ".json") or not Path(path).is_file():
+            continue
+        changed = changed_input(provenance_of(path))
+        if changed:
+            raise StaleInputError(f"{path} was computed from another {changed} than the one now on disk; rebuild it")
+
+
 def job_provenance(job: Any) -> dict:
     """What a Snakemake job's artifacts record: its rule, the digest of its code inputs (script and
-    package modules, read now, at job start), its parameters and wildcards."""
+    package modules, read now, at job start), its parameters and wildcards, and the content digest
+    of each of its other inputs."""
     code = list(getattr(job.input, "code", []))
+    data = [str(path) for path in job.input if str(path) not in set(code) and Path(path).is_file()]
 
     def plain(items: Any) -> dict:
         return json.loads(json.dumps(dict(items), default=str))
@@ -35,6 +52,7 @@ def job_provenance(job: Any) -> dict:
         "code": code_digest(code),
         "params": plain(job.params.items()),
         "wildcards": plain(job.wildcards.items()),
+        "inputs": {path: content_digest(path) for path in data},
     }
 
 
@@ -48,6 +66,8 @@ def job_log(job: Any) -> Iterator[logging.Logger]:
     path, provenance = (
         (job, None) if job is None or isinstance(job, (str, os.PathLike)) else (job.log[0], job_provenance(job))
     )
+    if provenance is not None:
+        check_inputs(list(provenance["inputs"]))
     root = logging.getLogger()
     handlers: list[logging.Handler] = [logging.StreamHandler(sys.stderr)]
     if path:
