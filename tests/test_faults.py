@@ -199,3 +199,43 @@ def test_an_input_replaced_under_its_consumers_is_not_trusted(built_repo, tmp_pa
     assert ("solve", {"scene": "smoke", "N": "21"}) in ran and ("errors", {"scene": "smoke"}) in ran
     assert "discretise" not in {rule for rule, _ in ran}  # the replaced system is valid: it is used
     check_inputs(["results/smoke/N21/solution.npz"])
+
+
+def test_temporaries_left_by_a_killed_job_are_removed(tmp_path, monkeypatch):
+    """``kill -9`` during an atomic write leaves ``.<name>.<random>.tmp``; the next run that
+    executes jobs deletes it, unless another run holds the directory's lock (its jobs may be
+    writing) or the file is fresh (a run with ``--nolock``)."""
+    from signorini.pipeline.cache import leftover_temporaries, remove_leftover_temporaries
+
+    monkeypatch.chdir(tmp_path)
+    old = tmp_path / "results/smoke/N11/.solution.npz.x1y2.tmp"
+    fresh = tmp_path / "results/smoke/N21/.solution.npz.a3b4.tmp"
+    for path in (old, fresh):
+        path.parent.mkdir(parents=True)
+        path.write_bytes(b"PK\x03\x04 half an archive")
+    os.utime(old, (1e9, 1e9))
+    lock = tmp_path / ".snakemake/locks/0.input.lock"
+    lock.parent.mkdir(parents=True)
+    lock.write_text("")
+    assert leftover_temporaries(["results"]) == []  # another run is active
+    lock.unlink()
+    assert remove_leftover_temporaries(["results"], execute=False) == [] and old.exists()  # read-only
+    assert remove_leftover_temporaries(["results"], execute=True) == [old.relative_to(tmp_path)]
+    assert not old.exists() and fresh.exists()
+
+
+@pytest.mark.slow
+def test_a_damaged_benchmark_file_is_rebuilt(built_repo, tmp_path):
+    """A benchmark ``.tsv`` that lost its row is moved aside, and when ``runtime.csv`` has to be
+    rebuilt its job reruns, instead of the run failing until someone repairs the file."""
+    from helpers import clone_built, planned, snakemake
+
+    repo = clone_built(built_repo, tmp_path / "repo")
+    tsv = repo / "results/smoke/benchmarks/N21/solve.tsv"
+    header = tsv.read_text().splitlines()[0]
+    assert artifact_ok(tsv)
+    tsv.write_text(header + "\n")
+    assert not artifact_ok(tsv)
+    ran = planned(snakemake(repo, "-c2", "--forcerun", "runtime", "--", "paper_figures/runtime.csv"))
+    assert ("solve", {"scene": "smoke", "N": "21"}) in ran and ("runtime", {}) in ran
+    assert artifact_ok(tsv) and (repo / "results/smoke/benchmarks/N21/solve.tsv.corrupt").exists()

@@ -18,6 +18,7 @@ from signorini.pipeline.cache import (
     cached_artifacts,
     executes,
     quarantine_corrupt,
+    remove_leftover_temporaries,
     remove_stale,
     warn_corrupt,
 )
@@ -211,10 +212,14 @@ def atlas_of(scene):
 # read-only call (-n, --lint, --report, -l, --summary, ...) only names it.
 # An artifact whose recorded code digest differs from the current code of its rule (a job that
 # imported the old code finished after an edit) is removed, so that it is rebuilt, not trusted.
+# Temporary files of atomic writes left by a killed job (kill -9) are deleted.
 if workflow.is_main_process:
-    _cached = list(cached_artifacts("results", config["scenes"]))
+    _cached = list(cached_artifacts(paths.RESULTS, config["scenes"]))
     if executes(sys.argv):
         quarantine_corrupt(_cached)
     else:
         warn_corrupt(_cached)
     remove_stale(_cached, current_code_digest, execute=executes(sys.argv))
+    remove_leftover_temporaries(
+        [paths.RESULTS, paths.FIGDIR], execute=executes(sys.argv)
+    )

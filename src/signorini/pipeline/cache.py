@@ -15,6 +15,7 @@ import math
 import os
 import re
 import sys
+import time
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 
@@ -53,6 +54,19 @@ def expected_rows(path: Path, scene_N: Sequence[int]) -> list[str] | None:
     return {"errors.csv": labels, "eoc.csv": [*labels[1:], "regression"]}.get(path.name)
 
 
+def _benchmark_ok(path: Path) -> bool:
+    """A complete Snakemake benchmark file: a header starting with ``s`` (seconds), at least one
+    row with the header's number of fields and a finite, non-negative number of seconds."""
+    text = path.read_text()
+    rows = [line.split("\t") for line in text.splitlines()]
+    if not text.endswith("\n") or len(rows) < 2 or rows[0][0] != "s":
+        return False
+    try:
+        return all(len(row) == len(rows[0]) and 0.0 <= float(row[0]) < math.inf for row in rows[1:])
+    except ValueError:
+        return False
+
+
 CHECKSUM_MAX_BYTES = 64 * 2**20  # larger archives (the assembled systems of fine meshes) get a structural check
 
 
@@ -70,7 +84,8 @@ def _zip_complete(path: Path) -> bool:
 
 def artifact_ok(path: str | os.PathLike, rows_expected: Sequence[str] | None = None) -> bool:
     """True unless ``path`` exists and fails its check (npz checksum, JSON completeness
-    marker, complete rows of ``errors.csv``/``eoc.csv``, with ``rows_expected``: exactly those ``N``)."""
+    marker, complete rows of ``errors.csv``/``eoc.csv``, with ``rows_expected``: exactly those ``N``,
+    complete rows of a benchmark ``.tsv``)."""
     path = Path(path)
     if not path.exists():
         return True
@@ -83,6 +98,8 @@ def artifact_ok(path: str | os.PathLike, rows_expected: Sequence[str] | None = N
             load_json(path)
         elif path.suffix == ".csv":
             return _csv_ok(path, rows_expected)
+        elif path.suffix == ".tsv":
+            return _benchmark_ok(path)
     except (CorruptArtifactError, OSError, UnicodeDecodeError, csv.Error):
         return False
     return True
@@ -203,6 +220,26 @@ def remove_stale(paths: Iterable, current_code: Callable[[str], str], execute: b
     return [path for path, _ in stale]
 
 
+def leftover_temporaries(roots: Iterable[str | os.PathLike], min_age_s: float = 120.0) -> list[Path]:
+    """The hidden temporary files of atomic writes (``.<name>.<random>.tmp``) under ``roots`` that a
+    killed job left behind: none while another run holds a Snakemake lock on this directory (its
+    jobs may be writing them), and none younger than ``min_age_s`` (a run with ``--nolock``)."""
+    if any(Path(".snakemake/locks").glob("*")):
+        return []
+    now = time.time()
+    found = [path for root in roots for path in Path(root).rglob(".*.tmp") if path.is_file()]
+    return sorted(path for path in found if now - path.stat().st_mtime > min_age_s)
+
+
+def remove_leftover_temporaries(roots: Iterable[str | os.PathLike], execute: bool) -> list[Path]:
+    """Delete ``leftover_temporaries`` (in a run that executes jobs; a read-only call keeps them)."""
+    leftovers = leftover_temporaries(roots) if execute else []
+    for path in leftovers:
+        path.unlink(missing_ok=True)
+        print(f"signorini: removed {path}, left behind by a killed job", file=sys.stderr)
+    return leftovers
+
+
 def quarantine_corrupt(paths: Iterable[str | os.PathLike]) -> list[str]:
     """Move every existing but corrupt artifact among ``paths`` to ``<name>.corrupt``.
 
@@ -223,9 +260,9 @@ def quarantine_corrupt(paths: Iterable[str | os.PathLike]) -> list[str]:
 
 
 def cached_artifacts(root: str | os.PathLike, scenes: Mapping[str, Mapping]) -> Iterator[Path | tuple]:
-    """The checkable cached artifacts (``.npz``, ``.json``, ``errors.csv``, ``eoc.csv``) of the
-    given scenes under ``root`` (the results directory), atlas cases included; the two tables
-    come with the ``N`` labels they must hold (``expected_rows``)."""
+    """The checkable cached artifacts (``.npz``, ``.json``, ``errors.csv``, ``eoc.csv``, benchmark
+    ``.tsv``) of the given scenes under ``root`` (the results directory), atlas cases included;
+    the two tables come with the ``N`` labels they must hold (``expected_rows``)."""
     for scene, block in scenes.items():
         base = Path(root) / scene
         yield from base.glob("*.npz")
@@ -236,6 +273,7 @@ def cached_artifacts(root: str | os.PathLike, scenes: Mapping[str, Mapping]) -> 
         yield from base.glob("N*/norms/*.json")
         yield from base.glob("N*/theory.json")
         yield from base.glob("N*/work_precision/*.json")
+        yield from base.glob("benchmarks/**/*.tsv")
         if "atlas" in block:
             yield from base.glob("atlas/*.json")
             yield from base.glob("atlas/*.npz")

@@ -10,6 +10,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+RESULTS = "results"  # the cached artifacts, logs and benchmark files
 FIGDIR = "paper_figures"
 REFERENCE = "workflow/reference"
 _MESH = "results/{scene}/N{N}"
