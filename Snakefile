@@ -11,16 +11,22 @@ min_version("9.0")
 # (-c2) and threaded BLAS inside the active-set loop oversubscribes the cores (5-20x slower).
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
+# Snakemake names no file or line for a YAML syntax error in a config file: check this one first
+# (python -m signorini.pipeline.config my.yaml checks files given with --configfile).
+sys.path.insert(0, os.path.join(workflow.basedir, "src"))
+from signorini.pipeline.config import DEFAULT_CONFIG, SCHEMA, load_yaml
+
+load_yaml(DEFAULT_CONFIG)
 
 
-configfile: "workflow/config.yaml"
+configfile: DEFAULT_CONFIG
 
 
 # jsonschema would import rfc3987_syntax (a notebook dependency's extra; it compiles 38 lark
 # grammars, about 1 s) for a string format this schema never uses: leave it out.
 sys.modules.setdefault("rfc3987_syntax", None)
 # also fills in the schema's defaults (diagonal, solver_options, conventions, figures_scene)
-validate(config, "workflow/schemas/config.schema.yaml")
+validate(config, SCHEMA)
 
 
 report: "workflow/report/workflow.rst"

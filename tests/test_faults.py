@@ -239,3 +239,21 @@ def test_a_damaged_benchmark_file_is_rebuilt(built_repo, tmp_path):
     ran = planned(snakemake(repo, "-c2", "--forcerun", "runtime", "--", "paper_figures/runtime.csv"))
     assert ("solve", {"scene": "smoke", "N": "21"}) in ran and ("runtime", {}) in ran
     assert artifact_ok(tsv) and (repo / "results/smoke/benchmarks/N21/solve.tsv.corrupt").exists()
+
+
+def test_a_yaml_syntax_error_is_named_with_file_and_line(tmp_path, monkeypatch, capsys):
+    """Snakemake says only that a config file is not valid YAML; the Snakefile checks the shipped
+    config first, and ``python -m signorini.pipeline.config`` a file given with ``--configfile``."""
+    from signorini.pipeline.config import load_yaml, main
+
+    bad = tmp_path / "mine.yaml"
+    bad.write_text("scenes:\n  mine:\n    N: [11, 21\n    norms: [L4]\n")
+    with pytest.raises(ConfigError, match=r"mine\.yaml:4:10: expected ',' or '\]'"):
+        load_yaml(bad)
+    monkeypatch.chdir(ROOT)
+    assert main([str(bad)]) == 1 and "mine.yaml:4:10" in capsys.readouterr().err
+    good = tmp_path / "good.yaml"
+    problem = "    problem: {x0: 0.5, R: 0.45, A: 10, c: 1}\n"
+    good.write_text(bad.read_text().replace("21\n", "21]\n") + "    solver: active_set\n" + problem)
+    scenes = len(load_yaml("workflow/config.yaml")["scenes"]) + 1
+    assert main([str(good)]) == 0 and f"({scenes} scenes)" in capsys.readouterr().out

@@ -7,11 +7,34 @@ names the offending field, e.g. ``scenes.paper.N[1]: 201.0 is not an integer``.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import sys
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+SCHEMA = "workflow/schemas/config.schema.yaml"
+DEFAULT_CONFIG = "workflow/config.yaml"
 
 
 class ConfigError(ValueError):
     """The workflow configuration is invalid; the message names the offending field."""
+
+
+def load_yaml(path: str | Path) -> dict:
+    """A config file's content; a syntax error is named with file, line and column (Snakemake
+    itself only says that a config file is not valid YAML)."""
+    import yaml
+
+    try:
+        data = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+    except yaml.MarkedYAMLError as err:
+        mark = err.problem_mark or err.context_mark
+        where = f"{path}:{mark.line + 1}:{mark.column + 1}" if mark else str(path)
+        raise ConfigError(f"{where}: {err.problem or err.context}") from None
+    except (OSError, yaml.YAMLError) as err:
+        raise ConfigError(f"{path}: {err}") from None
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path}: a config file holds a mapping of keys (scenes, figures_scene)")
+    return data
 
 
 def _check_N(where: str, Ns: list) -> None:
@@ -107,3 +130,26 @@ def check_config(config: Mapping, mem_limit_mb: int | None = None) -> None:
     fig = config.get("figures_scene")
     if fig is not None and fig not in scenes:
         raise ConfigError(f"figures_scene: {fig!r} is not one of the scenes {sorted(scenes)}")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m signorini.pipeline.config [FILE ...]``: check the workflow config with the given
+    ``--configfile`` files merged in, as a run would (syntax with file and line, schema, semantics)."""
+    from snakemake.utils import update_config, validate
+
+    files = [DEFAULT_CONFIG, *(sys.argv[1:] if argv is None else argv)]
+    try:
+        config: dict = {}
+        for path in files:
+            update_config(config, load_yaml(path))
+        validate(config, SCHEMA)
+        check_config(config)
+    except Exception as err:  # schema errors come as snakemake's WorkflowError
+        print(f"config check failed: {err}", file=sys.stderr)
+        return 1
+    print(f"config ok: {', '.join(files)} ({len(config['scenes'])} scenes)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
