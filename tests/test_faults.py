@@ -117,16 +117,40 @@ def test_a_mesh_that_cannot_fit_is_refused_before_any_job(N, limit, message):
 
 
 @pytest.mark.parametrize(
-    ("options", "message"),
-    [({"max_iters": 5}, "max_iters: not an option of active_set_solve"), ({"max_iter": "5"}, "is not of type int")],
+    ("solver", "options", "message"),
+    [
+        ("active_set", {"max_iters": 5}, "solver_options.max_iters: not an option of active_set_solve"),
+        ("active_set", {"max_iter": "5"}, "solver_options.max_iter: '5' is not of type int"),
+        ("cvxpy_osqp", {"max_iters": 5}, "solver_options.max_iters: not an option of cvxpy_solve/OSQP"),
+        ("cvxpy_scs", {"max_iter": 5}, "solver_options.max_iter: not an option of cvxpy_solve/SCS"),
+        ("cvxpy_clarabel", {"max_iter": "5"}, "solver_options.max_iter: '5' is not of type int"),
+        ("cvxpy", {"qp_solver": "OSQP", "tol": "1e-8"}, "solver_options.tol: '1e-8' is not of type float"),
+        ("cvxpy_osqp", {"normalize": "yes"}, "solver_options.normalize: 'yes' is not of type bool"),
+    ],
 )
-def test_unknown_or_mistyped_solver_options_are_refused(options, message):
+def test_unknown_or_mistyped_solver_options_are_refused(solver, options, message):
+    """Named before any job runs (they used to fail inside the solve job, after assembly, with an
+    unnamed TypeError); valid options of the same route pass."""
     config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
-    config["scenes"]["smoke"]["solver_options"] = options
-    with pytest.raises(ConfigError, match=message):
+    config["scenes"]["smoke"].update(solver=solver, solver_options=options)
+    with pytest.raises(ConfigError, match=f"scenes.smoke.{message}"):
         check_config(config)
-    config["scenes"]["smoke"]["solver_options"] = {"max_iter": 50, "kkt_tol": 1e-11}
+    valid = {"active_set": {"max_iter": 50, "kkt_tol": 1e-11}, "cvxpy": {"qp_solver": "OSQP", "tol": 1e-8}}
+    config["scenes"]["smoke"]["solver_options"] = valid.get(solver, {"tol": 1e-8, "normalize": True, "verbose": False})
     check_config(config)
+
+
+def test_mistyped_options_of_a_study_or_atlas_column_are_refused():
+    from signorini.studies.stability.atlas import AtlasConfigError, check_atlases
+    from signorini.studies.work_precision.study import StudyConfigError, study_configs
+
+    study = {"configs": {"osqp": {"solver": "OSQP", "options": {"polishing": "no"}}}}
+    with pytest.raises(StudyConfigError, match="study.configs.osqp.options.polishing: 'no' is not of type int"):
+        study_configs(study)
+    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config["scenes"]["stability"]["atlas"]["solvers"]["scs"]["options"]["time_limit"] = 60
+    with pytest.raises(AtlasConfigError, match="atlas.solvers.scs.options.time_limit: not an option of cvxpy_solve"):
+        check_atlases(config)
 
 
 def test_a_solution_of_another_problem_is_refused(solved, tmp_path):

@@ -500,3 +500,25 @@ def test_rounding_floor_is_capped():
     cert = kkt_certificate(A, b, np.array([0]), u, np.zeros(1), 1e-10)
     assert cert.floor > 1.0 and cert.stationarity == 1.0
     assert not cert.ok
+
+
+def test_the_option_tables_match_the_installed_qp_solvers():
+    """The config check knows OSQP's and SCS's settings without importing them: the tables must be
+    what the installed packages accept (a new release with other settings fails here)."""
+    import osqp.ext_builtin
+    import scs
+
+    from signorini.pipeline.solver_options import OSQP_SETTINGS, SCS_SETTINGS, route_options
+
+    settings = osqp.ext_builtin.OSQPSettings()
+    installed = {name for name in dir(settings) if not name.startswith("_")}
+    assert set(OSQP_SETTINGS) == installed
+    for name, kind in OSQP_SETTINGS.items():
+        assert kind is object or isinstance(getattr(settings, name), kind), name
+    data = {"P": sp.csc_matrix(np.eye(1)), "A": sp.csc_matrix(-np.eye(1)), "b": np.zeros(1), "c": np.ones(1)}
+    values = {bool: False, int: 100, float: 1e-6, str: ""}
+    scs.SCS(data, {"l": 1}, **{name: values[kind] for name, kind in SCS_SETTINGS.items() if kind is not str})
+    scs.SCS(data, {"l": 1}, linear_solver="qdldl", write_data_filename=None, log_csv_filename=None)
+    with pytest.raises(TypeError):
+        scs.SCS(data, {"l": 1}, not_a_setting=1)
+    assert "polishing" in route_options("cvxpy_osqp")[1] and "tol" in route_options("OSQP")[1]

@@ -71,34 +71,13 @@ def _check_memory(where: str, Ns: list, limit_mb: int) -> None:
             )
 
 
-def _check_solver_options(where: str, solver: str, options: Mapping) -> None:
-    """Unknown or mistyped options of the active-set solver, named before any job runs (the cvxpy
-    routes pass unknown keywords on to the QP solver, which names them itself)."""
-    import inspect
-
-    from signorini.solvers import active_set_solve
-
-    if solver != "active_set":
-        return
-    params = inspect.signature(active_set_solve).parameters
-    allowed = {name: p.default for name, p in params.items() if name not in ("A", "b", "constrained")}
-    for key, value in options.items():
-        if key not in allowed:
-            raise ConfigError(
-                f"{where}.solver_options.{key}: not an option of active_set_solve; choose from {sorted(allowed)}"
-            )
-        default = allowed[key]
-        kind = float if isinstance(default, float) else type(default)
-        if default is not None and not isinstance(value, kind if kind is not float else (int, float)):
-            raise ConfigError(f"{where}.solver_options.{key}: {value!r} is not of type {kind.__name__}")
-
-
 def check_config(config: Mapping, mem_limit_mb: int | None = None) -> None:
     """Semantic checks of a schema-valid config: integer ``N`` (not ``101.0``), unique ``N``,
     norm names of the grammar (``fem.norm_names``), admissible problem parameters and conventions,
-    meshes whose jobs fit into ``mem_limit_mb`` (default: this machine's memory), the active-set
-    solver's options."""
+    meshes whose jobs fit into ``mem_limit_mb`` (default: this machine's memory), the solver's
+    options (names and types, ``signorini.pipeline.solver_options``)."""
     from signorini.pipeline.resources import machine_mem_mb
+    from signorini.pipeline.solver_options import check_options
 
     limit = int(mem_limit_mb) if mem_limit_mb else machine_mem_mb()
     from signorini.fem.norms import Conventions
@@ -111,8 +90,9 @@ def check_config(config: Mapping, mem_limit_mb: int | None = None) -> None:
         where = f"scenes.{name}"
         _check_N(where, scene.get("N", []))
         _check_memory(where, scene.get("N", []), limit)
-        if scene.get("solver_options"):
-            _check_solver_options(where, scene.get("solver", ""), scene["solver_options"])
+        problem = check_options(f"{where}.solver_options", scene.get("solver", ""), scene.get("solver_options") or {})
+        if problem:
+            raise ConfigError(problem)
         _check_norms(where, scene.get("norms", []))
         try:
             problem = Problem(**scene.get("problem", {}))

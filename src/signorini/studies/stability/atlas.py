@@ -107,10 +107,16 @@ class Atlas:
 
 def _parse_solvers(block: Mapping, where: str) -> tuple[dict[str, SolverSpec], tuple[str, ...]]:
     """The solver columns and the default columns of a case."""
+    from signorini.pipeline.solver_options import check_options
+
     specs: dict[str, SolverSpec] = {}
     for label, spec in (block.get("solvers") or {}).items():
         if not CASE_NAME.match(str(label)) or not isinstance(spec, Mapping) or "solver" not in spec:
             raise AtlasConfigError(f"{where}.atlas.solvers.{label}: needs a name [A-Za-z0-9_.+-] and a 'solver'")
+        options = spec.get("options") or {}
+        problem = check_options(f"{where}.atlas.solvers.{label}.options", str(spec["solver"]), options)
+        if problem:
+            raise AtlasConfigError(problem)
         specs[label] = SolverSpec(
             str(label),
             str(spec["solver"]),

@@ -43,6 +43,8 @@ def study_configs(study: Mapping, installed: Sequence[str] = ()) -> dict[str, So
     plus, with ``qp_solvers: installed`` (the QP solvers ``installed``, e.g.
     ``signorini.solvers.installed_qp_solvers()``) or a list of names, one configuration per cvxpy
     QP solver, named by the lower-case solver name, unless a configuration of that name exists."""
+    from signorini.pipeline.solver_options import check_options
+
     out: dict[str, SolverConfig] = {}
     for name, spec in (study.get("configs") or {}).items():
         solver = str(spec["solver"])
@@ -55,9 +57,12 @@ def study_configs(study: Mapping, installed: Sequence[str] = ()) -> dict[str, So
         name = solver.lower()
         if name not in out:
             out[name] = SolverConfig(name, solver.upper(), solver.upper(), {})
-    for name in out:
+    for name, config in out.items():
         if not re.fullmatch(r"[a-z0-9_]+", name):
             raise StudyConfigError(f"configuration name {name!r}: use lower-case letters, digits and _")
+        problem = check_options(f"study.configs.{name}.options", config.solver, config.options)
+        if problem:
+            raise StudyConfigError(problem)
     return out
 
 

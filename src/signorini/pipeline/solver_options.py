@@ -1,0 +1,127 @@
+"""The options each solver route accepts, known before any job runs.
+
+A configuration's solver options (a scene's ``solver_options``, a work-precision configuration's
+``options``, an atlas column's ``options``) are checked at parse time, every Snakemake call, so
+nothing here imports a solver: the active-set and cvxpy signatures are read from the source of
+``signorini.solvers`` (``ast``), Clarabel's settings from its extension (about 1 ms), and OSQP's
+and SCS's from the tables below (importing OSQP pulls in ``scipy.sparse``, about 0.5 s; SCS names
+its settings nowhere but in its documentation).  ``tests/test_solvers.py`` checks both tables
+against the installed packages.
+"""
+
+from __future__ import annotations
+
+import ast
+from collections.abc import Mapping
+from functools import cache
+from pathlib import Path
+from typing import NamedTuple
+
+_SOLVERS = Path(__file__).resolve().parents[1] / "solvers"
+
+# OSQP 1.x settings (osqp.ext_builtin.OSQPSettings); the flags are integers there, true/false is fine
+OSQP_SETTINGS: dict[str, type] = {
+    **dict.fromkeys(
+        ("adaptive_rho", "adaptive_rho_interval", "cg_max_iter", "cg_tol_reduction", "check_dualgap"), int
+    ),
+    **dict.fromkeys(("check_termination", "device", "max_iter", "polish_refine_iter", "polishing"), int),
+    **dict.fromkeys(("rho_is_vec", "scaled_termination", "scaling", "verbose", "warm_starting"), int),
+    **dict.fromkeys(("adaptive_rho_fraction", "adaptive_rho_tolerance", "alpha", "cg_tol_fraction"), float),
+    **dict.fromkeys(("delta", "eps_abs", "eps_dual_inf", "eps_prim_inf", "eps_rel", "rho", "sigma"), float),
+    "time_limit": float,
+    "cg_precond": object,  # enumerations of the extension
+    "linsys_solver": object,
+}
+# SCS 3.3 settings (https://www.cvxgrp.org/scs/api/settings.html), and the ones cvxpy translates
+# (eps, use_indirect -> linear_solver)
+SCS_SETTINGS: dict[str, type] = {
+    **dict.fromkeys(("max_iters", "acceleration_lookback", "acceleration_interval"), int),
+    **dict.fromkeys(("eps_abs", "eps_rel", "eps_infeas", "alpha", "rho_x", "scale", "time_limit_secs"), float),
+    **dict.fromkeys(("adaptive_scale", "normalize", "verbose"), bool),
+    **dict.fromkeys(("write_data_filename", "log_csv_filename", "linear_solver"), str),
+}
+SCS_VIA_CVXPY: dict[str, type] = {"eps": float, "use_indirect": bool}
+# keywords of cvxpy's Problem.solve itself, taken by every QP solver
+CVXPY_SOLVE: dict[str, type] = {"verbose": bool, "ignore_dpp": bool, "enforce_dpp": bool, "canon_backend": str}
+
+
+_BUILTIN = {"int": int, "float": float, "bool": bool, "str": str}
+
+
+class Option(NamedTuple):
+    """What an option accepts: values of ``kind`` (None: any), and null when ``nullable``."""
+
+    kind: type | None
+    nullable: bool = False
+
+
+@cache
+def signature_options(module: str, function: str) -> dict[str, Option]:
+    """The keyword parameters of ``signorini.solvers.<module>.<function>`` after the data
+    ``(A, b, constrained)``, read from the source: the type of the default, or for a default of
+    None the builtin type of the annotation ``T | None`` (any other: any type)."""
+    tree = ast.parse((_SOLVERS / f"{module}.py").read_text())
+    node = next(n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name == function)
+    params = node.args.args[3:]
+    defaults = node.args.defaults[-len(params) :] if params else []
+    options: dict[str, Option] = {}
+    for param, default in zip(params, defaults, strict=True):
+        value = ast.literal_eval(default)
+        if value is None:
+            first, _, rest = (ast.unparse(param.annotation) if param.annotation else "").partition(" | ")
+            options[param.arg] = Option(_BUILTIN.get(first) if rest == "None" else None, nullable=True)
+        else:
+            options[param.arg] = Option(type(value))
+    return options
+
+
+def _clarabel_settings() -> dict[str, type]:
+    import clarabel
+
+    settings = clarabel.DefaultSettings()
+    return {
+        name: type(getattr(settings, name))
+        for name in dir(settings)
+        if not name.startswith("_") and not callable(getattr(settings, name))
+    }
+
+
+def qp_settings(qp_solver: str) -> dict[str, type] | None:
+    """The settings cvxpy passes on to ``qp_solver`` (None: not known here, not checked)."""
+    solver = qp_solver.upper()
+    if solver == "CLARABEL":
+        return _clarabel_settings()
+    return {"OSQP": {**OSQP_SETTINGS, "polish": int}, "SCS": {**SCS_SETTINGS, **SCS_VIA_CVXPY}}.get(solver)
+
+
+def route_options(route: str) -> tuple[str, dict[str, Option] | None]:
+    """The function a solver route reaches and the options it accepts (None: not checked): the
+    scene's solver names (``active_set``, ``cvxpy_<QP>``) and a work-precision configuration's
+    (``active_set`` or the QP solver's name, e.g. ``OSQP``)."""
+    if route == "active_set":
+        return "active_set_solve", signature_options("active_set", "active_set_solve")
+    qp = route.removeprefix("cvxpy_")
+    settings = qp_settings(qp)
+    if settings is None:
+        return f"cvxpy_solve/{qp.upper()}", None
+    own = {k: v for k, v in signature_options("cvxpy_qp", "cvxpy_solve").items() if k != "solver"}
+    return f"cvxpy_solve/{qp.upper()}", {**own, **{k: Option(t) for k, t in {**CVXPY_SOLVE, **settings}.items()}}
+
+
+def check_options(where: str, route: str, options: Mapping) -> str | None:
+    """The first problem with ``options`` of a solver ``route`` (an unknown name or a value of the
+    wrong type), as a message naming the field under ``where``, or None."""
+    if route == "cvxpy":  # the QP solver is an option itself
+        options = dict(options)
+        route = f"cvxpy_{options.pop('qp_solver', 'CLARABEL')}"
+    function, accepted = route_options(route)
+    for key, value in (options.items() if accepted is not None else ()):
+        if key not in accepted:
+            return f"{where}.{key}: not an option of {function}; choose from {sorted(accepted)}"
+        kind, nullable = accepted[key]
+        if kind is None or kind is object or (value is None and nullable):
+            continue
+        ok = (int, float) if kind is float else kind
+        if not isinstance(value, ok) or (kind in (float, str) and isinstance(value, bool)):
+            return f"{where}.{key}: {'null' if value is None else repr(value)} is not of type {kind.__name__}"
+    return None
