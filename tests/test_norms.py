@@ -479,3 +479,33 @@ def test_chunked_evaluation_equals_whole_field(chunk):
     chunked = evaluate_norms(problem, disc.mesh, u_h, names, chunk=chunk)
     for name in names:
         assert chunked[name] == pytest.approx(whole[name], rel=1e-12), name
+
+
+def test_scaled_power_sums_equal_the_plain_formula_in_range():
+    """Scaling by a power of two changes no bit where the plain formula neither overflows nor
+    underflows, so the paper's tables are unchanged by it."""
+    from signorini.fem.norms import scaled_p_sum
+
+    rng = np.random.default_rng(7)
+    for p in (2.0, 4.0, 16.0, 32.0):
+        x, y, w = rng.uniform(-3, 3, 500), rng.uniform(-3, 3, 500), rng.uniform(0, 1e-3, 500)
+        assert scaled_p_sum([x, y], p, w) == float(np.sum((np.abs(x) ** p + np.abs(y) ** p) * w) ** (1 / p))
+    assert scaled_p_sum([np.zeros(3)], 4.0) == 0.0
+
+
+@pytest.mark.parametrize("amplitude", [1e-200, 1e-12, 1e12, 1e300])
+def test_every_norm_scales_with_the_amplitude(amplitude):
+    """u, u_h and every norm of u - u_h are linear in A: no power |e|^p may overflow (A = 10^300,
+    or p = 32 at A = 10^12) or underflow to a silent zero (p = 32 at A = 10^-12)."""
+    from signorini.fem.discrete import build
+    from signorini.fem.norms import evaluate_norms
+    from signorini.fem.problem import Problem
+    from signorini.fem.solve import solve_discrete
+
+    names = ["L2", "L4", "L16", "L32", "Linf", "W14", "W116", "W1inf", "H1", "H12", "L4plus", "L4minus"]
+    values = {}
+    for A in (1.0, amplitude):
+        disc = build(Problem(x0=0.5, R=0.45, A=A, c=1.0), 21, "sw_ne")
+        values[A] = evaluate_norms(disc.problem, disc.mesh, solve_discrete(disc).u, names, chunk=200)
+    for name in names:
+        assert values[amplitude][name] / amplitude == pytest.approx(values[1.0][name], rel=1e-12), name

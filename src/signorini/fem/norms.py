@@ -233,10 +233,27 @@ def error_field(
 # --- the norms ---------------------------------------------------------------------
 
 
+def power_scale(values: np.ndarray) -> float:
+    """A power of two near ``max |values|`` (1 when they vanish): dividing by it is exact, and
+    ``|x / scale|^p`` neither overflows nor underflows where ``|x|^p`` would (``A = 10^±12`` and
+    ``p = 32``, or any ``p`` at ``A = 10^100``)."""
+    top = float(np.max(np.abs(values), initial=0.0))
+    return float(2.0 ** np.floor(np.log2(top))) if 0.0 < top < np.inf else 1.0
+
+
+def scaled_p_sum(parts: list[np.ndarray], p: float, weights: np.ndarray | float = 1.0) -> float:
+    """(Σ weights · Σ_parts |x|^p)^{1/p}, computed as ``s · (Σ weights · Σ |x/s|^p)^{1/p}`` with the
+    power of two ``s = power_scale``: the same value as the plain formula where that is finite
+    and non-zero (correctly rounded powers commute with exact scaling), the right one elsewhere."""
+    scale = max((power_scale(x) for x in parts), default=1.0)
+    total = sum(np.abs(x / scale) ** p for x in parts)
+    return float(np.sum(total * weights) ** (1.0 / p) * scale)
+
+
 def lp_norm(f: ErrorField, p: float, part: str = "") -> float:
     """(∫ |g|^p)^{1/p} with g = e, e⁺ = max(e, 0) (part "plus") or e⁻ = max(-e, 0) ("minus")."""
     g = {"": np.abs(f.e), "plus": np.maximum(f.e, 0.0), "minus": np.maximum(-f.e, 0.0)}[part]
-    return float(np.sum(g**p * f.dx) ** (1.0 / p))
+    return scaled_p_sum([g], p, f.dx)
 
 
 def linf_norm(f: ErrorField, part: str = "") -> float:
@@ -248,14 +265,13 @@ def linf_norm(f: ErrorField, part: str = "") -> float:
 def w1p_norm(f: ErrorField, p: float) -> float:
     """W^{1,p}: components (‖e‖ᵖ + ‖∂₁e‖ᵖ + ‖∂₂e‖ᵖ)^{1/p}, gradient (‖e‖ᵖ + ‖|∇e|‖ᵖ)^{1/p}, or seminorm ‖|∇e|‖_p."""
     form = f.conventions.w1p_form
-    ae = np.abs(f.e) ** p
     if form == "components":
-        integrand = ae + np.abs(f.de[0]) ** p + np.abs(f.de[1]) ** p
+        parts = [f.e, f.de[0], f.de[1]]
     elif form == "gradient":
-        integrand = ae + np.hypot(f.de[0], f.de[1]) ** p
+        parts = [f.e, np.hypot(f.de[0], f.de[1])]
     else:
-        integrand = np.hypot(f.de[0], f.de[1]) ** p
-    return float(np.sum(integrand * f.dx) ** (1.0 / p))
+        parts = [np.hypot(f.de[0], f.de[1])]
+    return scaled_p_sum(parts, p, f.dx)
 
 
 def w1inf_norm(f: ErrorField) -> float:
@@ -269,17 +285,17 @@ def w1inf_norm(f: ErrorField) -> float:
 
 def h1_norm(f: ErrorField) -> float:
     """(‖e‖²_{L²} + ‖∇e‖²_{L²})^{1/2}."""
-    return float(np.sqrt(np.sum((f.e**2 + f.de[0] ** 2 + f.de[1] ** 2) * f.dx)))
+    return scaled_p_sum([f.e, f.de[0], f.de[1]], 2.0, f.dx)
 
 
 def boundary_l2_norm(f: ErrorField) -> float:
     """‖e‖_{L²(∂Ω)}."""
-    return float(np.sqrt(np.sum(f.eb**2 * f.dsb)))
+    return scaled_p_sum([f.eb], 2.0, f.dsb)
 
 
 def boundary_h1_seminorm(f: ErrorField) -> float:
     """|e|_{H¹(∂Ω)} = ‖∂_t e‖_{L²(∂Ω)}, edge by edge."""
-    return float(np.sqrt(np.sum(f.dteb**2 * f.dsb)))
+    return scaled_p_sum([f.dteb], 2.0, f.dsb)
 
 
 def h12_interpolation_norm(f: ErrorField) -> float:
@@ -287,7 +303,8 @@ def h12_interpolation_norm(f: ErrorField) -> float:
     with the full H¹(∂Ω) norm (``geometric_full``) or the seminorm (``geometric_semi``)."""
     l2, semi = boundary_l2_norm(f), boundary_h1_seminorm(f)
     h1 = np.hypot(l2, semi) if f.conventions.h12_form == "geometric_full" else semi
-    return float(np.sqrt(l2 * h1))
+    scale = power_scale(np.array([l2, h1]))  # exact: the product neither overflows nor underflows
+    return float(np.sqrt((l2 / scale) * (h1 / scale)) * scale)
 
 
 def parse_norm(name: str):
@@ -337,17 +354,16 @@ def evaluate_norms(
     out: dict[str, float] = {}
     if boundary:
         out.update(compute_norms(error_field(problem, mesh, u_h, conventions, norms=boundary), boundary))
-    acc = dict.fromkeys(cell, 0.0)
+    acc: dict[str, list[float]] = {name: [] for name in cell}  # the value on each chunk
     n_el = mesh.t.shape[1]
     for start in range(0, n_el if cell else 0, chunk):
         field = error_field(
             problem, mesh, u_h, conventions, norms=cell, elements=np.arange(start, min(n_el, start + chunk))
         )
         for name in cell:
-            kind, p = reductions[name]
-            value = parse_norm(name)(field)
-            acc[name] = max(acc[name], value) if kind == "max" else acc[name] + value**p
+            acc[name].append(parse_norm(name)(field))
     for name in cell:
         kind, p = reductions[name]
-        out[name] = acc[name] if kind == "max" else acc[name] ** (1.0 / p)
+        values = np.array(acc[name])
+        out[name] = float(values.max()) if kind == "max" else scaled_p_sum([values], p)
     return {name: out[name] for name in names}
