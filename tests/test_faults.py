@@ -281,3 +281,27 @@ def test_a_yaml_syntax_error_is_named_with_file_and_line(tmp_path, monkeypatch, 
     good.write_text(bad.read_text().replace("21\n", "21]\n") + "    solver: active_set\n" + problem)
     scenes = len(load_yaml("workflow/config.yaml")["scenes"]) + 1
     assert main([str(good)]) == 0 and f"({scenes} scenes)" in capsys.readouterr().out
+
+
+def test_the_damage_check_covers_every_kind_of_artifact(tmp_path):
+    """The theory, work-precision and atlas artifacts and the benchmark files are checked like
+    the chain's: each damaged one is found, an intact one is not."""
+    kinds = [
+        "N11/theory.json",
+        "N11/work_precision/osqp.json",
+        "atlas/A_1.json",
+        "N11/norms/L4.json",
+        "N11/solution.json",
+    ]
+    for name in kinds:
+        save_json(tmp_path / "s" / name, {"value": 1.0})
+    tsv = tmp_path / "s/benchmarks/N11/solve.tsv"
+    tsv.parent.mkdir(parents=True)
+    tsv.write_text("s\th:m:s\tmax_rss\n0.5\t0:00:00\t100.0\n")
+    scene = {"N": [11], "atlas": {}}
+    assert corrupt_artifacts(cached_artifacts(tmp_path, {"s": scene})) == []
+    for name in kinds:
+        (tmp_path / "s" / name).write_text((tmp_path / "s" / name).read_text().replace("1.0", "2.0"))
+    tsv.write_text("s\th:m:s\tmax_rss\n")
+    damaged = corrupt_artifacts(cached_artifacts(tmp_path, {"s": scene}))
+    assert sorted(damaged) == sorted(str(tmp_path / "s" / name) for name in [*kinds, "benchmarks/N11/solve.tsv"])
