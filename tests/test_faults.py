@@ -4,7 +4,10 @@ values, tables that lost a row, a scene whose errors vanish, artifacts unreadabl
 from __future__ import annotations
 
 import os
+import signal
 import stat
+import subprocess
+import time
 
 import numpy as np
 import pytest
@@ -305,3 +308,39 @@ def test_the_damage_check_covers_every_kind_of_artifact(tmp_path):
     tsv.write_text("s\th:m:s\tmax_rss\n")
     damaged = corrupt_artifacts(cached_artifacts(tmp_path, {"s": scene}))
     assert sorted(damaged) == sorted(str(tmp_path / "s" / name) for name in [*kinds, "benchmarks/N11/solve.tsv"])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT])
+def test_a_run_killed_during_a_job_recovers_bit_for_bit(built_repo, tmp_path, sig):
+    """``kill -9`` of the whole run (or Ctrl-C) while a solve job runs: never a partial file under
+    a final name, and the next run that requests the file (after ``--unlock`` for ``kill -9``)
+    writes the same bytes."""
+    from helpers import SNAKEMAKE, clone_built, snakemake
+
+    repo = clone_built(built_repo, tmp_path / "repo")
+    solution = repo / "results/smoke/N41/solution.npz"
+    before = solution.read_bytes()
+    started = repo / "results/smoke/logs/N41/solve.log"
+    started.unlink()
+    run = subprocess.Popen(
+        [SNAKEMAKE, "-c1", "--forcerun", "solve", "--", "results/smoke/N41/solution.npz"],
+        cwd=repo,
+        start_new_session=True,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    deadline = time.monotonic() + 300
+    while not started.exists() and run.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert run.poll() is None, "the run ended before its solve job started"
+    os.killpg(run.pid, sig)
+    run.wait(timeout=120)
+    assert not solution.exists() or artifact_ok(solution)
+    for leftover in (repo / "results").rglob(".*.tmp"):  # as if the next run came minutes later
+        os.utime(leftover, (1e9, 1e9))
+    if sig == signal.SIGKILL:
+        snakemake(repo, "--unlock")
+    snakemake(repo, "-c1", "results/smoke/N41/solution.npz", "results/smoke/errors.csv")
+    assert solution.read_bytes() == before
+    assert not list((repo / "results").rglob(".*.tmp"))
