@@ -18,6 +18,7 @@ import json
 import os
 import subprocess
 import tempfile
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -131,6 +132,7 @@ def _outcome(config: SolverConfig, disc, tol: float | None, answer: dict, u) -> 
     extra = {
         "setup_s": float(answer["setup_s"]) if "setup_s" in answer else float("nan"),
         "converged_reason": str(answer.get("converged_reason", "")),
+        "peer_info": peer_info(answer),
         "peer": {k: answer.get(k) for k in ("petsc_version", "options", "effective", "python", "setup_times")},
     }
     if answer.get("status") == "unavailable":
@@ -147,6 +149,18 @@ def _outcome(config: SolverConfig, disc, tol: float | None, answer: dict, u) -> 
         reason = f"KKT residual {worst:.1e} > tolerance {required:.0e}"
         return PeerOutcome(result, "inaccurate", reason, times, extra)
     return PeerOutcome(result, "ok", "", times, extra)
+
+
+def peer_info(answer: Mapping) -> str:
+    """``PETSc 3.18.5: vinewtonrsls ksp=cg pc=hypre/boomeramg``: the version and the solver types
+    PETSc actually used (what the CSV shows; the options are in the JSON records)."""
+    eff = answer.get("effective") or {}
+    if "petsc_version" not in answer:
+        return ""
+    pc = eff.get("pc_type")
+    inner = eff.get("factor_solver_type") or eff.get("hypre_type")
+    kinds = f" ksp={eff.get('ksp_type')} pc={pc}{'/' + inner if inner else ''}" if pc else ""
+    return f"PETSc {answer['petsc_version']}: {eff.get('type', '')}{kinds}"
 
 
 def peer_result(name: str, A, b: np.ndarray, boundary: np.ndarray, u: np.ndarray, tol: float, answer: dict):

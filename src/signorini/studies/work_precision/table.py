@@ -32,6 +32,7 @@ ID_COLUMNS = [
     "solver_time_s",
     "setup_s",
     "converged_reason",
+    "peer_info",
     "iterations",
     "n_active",
     "kkt_stationarity",
@@ -70,12 +71,13 @@ def read_measurements(path: str | os.PathLike) -> pd.DataFrame:
     import pandas as pd
 
     try:
-        dtype = {"reason": str, "times": str, "tol_label": str, "converged_reason": str}
+        dtype = {"reason": str, "times": str, "tol_label": str, "converged_reason": str, "peer_info": str}
         df = pd.read_csv(path, dtype=dtype, keep_default_na=True)
     except (OSError, ValueError) as err:
         raise CorruptArtifactError(f"{path}: unreadable CSV ({err})") from err
     df["reason"] = df["reason"].fillna("")
     df["converged_reason"] = df["converged_reason"].fillna("")
+    df["peer_info"] = df["peer_info"].fillna("")
     return df
 
 
