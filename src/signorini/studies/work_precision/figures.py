@@ -31,8 +31,9 @@ def _config_colors(df) -> dict:
 
 def _line_style(sub, config: str) -> str:
     """Dashed for the PETSc peers, solid for the others."""
-    solver = sub.loc[sub["config"] == config, "solver"]
-    return "--" if len(solver) and str(solver.iloc[0]).startswith("petsc_") else "-"
+    from signorini.studies.work_precision.findings import is_peer
+
+    return "--" if is_peer(sub[sub["config"] == config]).any() else "-"
 
 
 def _run_points(ax, sub, config: str, order, color, norm: str, floor: float) -> None:
@@ -222,7 +223,9 @@ def time_panel(df, ax=None):
 
 def is_peer_table(df) -> bool:
     """Whether the table holds PETSc peer runs."""
-    return bool(df["solver"].astype(str).str.startswith("petsc_").any())
+    from signorini.studies.work_precision.findings import is_peer
+
+    return bool(is_peer(df).any())
 
 
 def cost_of_accuracy(df, fig=None):

@@ -193,7 +193,11 @@ def _closest_l4(df: pd.DataFrame, paper_l4: Mapping[int, float] | None) -> dict[
 
 
 def is_peer(df: pd.DataFrame) -> pd.Series:
-    """The rows of PETSc peers (``solver`` ``petsc_snes``/``petsc_tao``)."""
+    """The rows of PETSc peers (``solver`` ``petsc_snes``/``petsc_tao``; none without the column)."""
+    import pandas as pd
+
+    if "solver" not in df.columns:
+        return pd.Series(False, index=df.index)
     return df["solver"].astype(str).str.startswith("petsc_")
 
 
