@@ -16,7 +16,7 @@ FIND_UV = uv="$(UV)"; if [ -z "$$uv" ]; then \
 	[ -x .tools/bin/uv ] || { "$(PYTHON)" -m venv .tools && .tools/bin/pip install --quiet uv==$(UV_VERSION); } || exit 1; \
 	uv=.tools/bin/uv; fi
 
-.PHONY: setup all test lock lint dag bench report clean-corrupt clean-results
+.PHONY: setup setup-peers all test lock lint dag bench report clean-corrupt clean-results
 
 ## setup: create .venv with uv from the hash-pinned environment.lock and install the package (editable)
 setup: $(STAMP)
@@ -27,6 +27,11 @@ $(STAMP): environment.lock pyproject.toml
 	$$uv pip sync --python $(BIN)/python --require-hashes --compile-bytecode environment.lock && \
 	$$uv pip install --python $(BIN)/python --no-deps --compile-bytecode -e . && \
 	touch $@
+
+## setup-peers: Debian's PETSc with petsc4py for /usr/bin/python3 (as root), the work-precision study's PETSc peers
+setup-peers:
+	apt-get install -y --no-install-recommends python3-petsc4py-real
+	/usr/bin/python3 workflow/peers/petsc_peer.py probe
 
 ## all: set up, then run the whole pipeline (paper scene -> paper_figures/)
 all: setup

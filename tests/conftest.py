@@ -99,7 +99,15 @@ TEST_SCENES = {
             "tolerances": [1e-2, 1e-8],
             "time_limit_s": 30,
             "figure_N": [11, 21],
-            "configs": {"active_set": {"solver": "active_set", "label": "active set"}},
+            "configs": {
+                "active_set": {"solver": "active_set", "label": "active set"},
+                # a PETSc peer: certified rows with petsc4py under /usr/bin/python3, skipped rows without
+                "petsc_tron": {
+                    "solver": "petsc_tao",
+                    "label": "TAO TRON",
+                    "options": {"tao_type": "tron", "pc_type": "cholesky", "pc_factor_mat_solver_type": "cholmod"},
+                },
+            },
             "qp_solvers": ["OSQP"],
         },
     },

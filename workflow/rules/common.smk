@@ -179,6 +179,11 @@ def wp_previous(wildcards):
     )
 
 
+def wp_peer_driver(wildcards):
+    """The PETSc peers' driver, for a peer configuration's jobs (none for the others)."""
+    return [paths.PEER_DRIVER] if wp_configs(wildcards)[wildcards.solver].peer else []
+
+
 def wp_disc_norms(wildcards):
     """{norm: the source scene's norm artifact of this N}: the discretisation errors."""
     source, N = study_of(wildcards)["source"], wildcards.N

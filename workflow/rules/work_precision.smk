@@ -13,6 +13,8 @@ rule work_precision_measure:
         disc=lambda wc: list(wp_disc_norms(wc).values()),
         prev=wp_previous,
         code=code("work_precision_measure"),
+        # a PETSc peer's driver runs outside the package: an edit reruns the peers' jobs only
+        peer_driver=wp_peer_driver,
     output:
         json=PATHS["wp_measure_json"],
     log:
@@ -43,6 +45,7 @@ rule work_precision_measure:
             "growth_exponent", wp_study.GROWTH_EXPONENT
         ),
         disc_norm_jsons=wp_disc_norms,
+        peer_python=lambda wc: study_of(wc).get("peer_python", wp_study.PEER_PYTHON),
     script:
         "../scripts/work_precision_measure.py"
 

@@ -14,6 +14,7 @@ with job_log(snakemake):
         "exact": i.exact,
         "disc": p.disc_norm_jsons,
         "prev": i.prev or None,
+        "peer_driver": i.peer_driver[0] if i.peer_driver else None,
     }
     measure_stage(
         SceneMesh.of_job(snakemake),
@@ -24,4 +25,5 @@ with job_log(snakemake):
         snakemake.output.json,
         conventions=p.conventions,
         growth_exponent=p.growth_exponent,
+        peer_python=p.peer_python,
     )

@@ -45,6 +45,9 @@ BENCHMARKS = {
     "case": "results/{scene}/benchmarks/atlas/{case}.tsv",
 }
 
+# the PETSc peers' driver: an external program (stdlib, numpy, petsc4py), a code input of its jobs
+PEER_DRIVER = "workflow/peers/petsc_peer.py"
+
 REFERENCES = {
     "paper_table1": f"{REFERENCE}/paper_table1.csv",
     "paper_table2": f"{REFERENCE}/paper_table2.csv",

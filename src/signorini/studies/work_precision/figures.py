@@ -20,8 +20,25 @@ def _marker(label: str) -> str:
     return TOL_MARKERS.get(label, "h")
 
 
+def _config_colors(df) -> dict:
+    """One colour per configuration: tab10 for up to 10, tab20 for up to 20, then tab20 again."""
+    import matplotlib
+
+    configs = list(dict.fromkeys(df["config"]))
+    cmap = matplotlib.colormaps["tab10" if len(configs) <= 10 else "tab20"]
+    return {c: cmap(k % cmap.N) for k, c in enumerate(configs)}
+
+
+def _line_style(sub, config: str) -> str:
+    """Dashed for the PETSc peers, solid for the others."""
+    from signorini.studies.work_precision.findings import is_peer
+
+    return "--" if is_peer(sub[sub["config"] == config]).any() else "-"
+
+
 def _run_points(ax, sub, config: str, order, color, norm: str, floor: float) -> None:
-    """One configuration's runs on one panel: a marker per tolerance, a line through the sweep."""
+    """One configuration's runs on one panel: a marker per tolerance, a line through the sweep
+    (dashed for a PETSc peer)."""
     from matplotlib.transforms import blended_transform_factory
 
     top = blended_transform_factory(ax.transData, ax.transAxes)
@@ -53,14 +70,21 @@ def _run_points(ax, sub, config: str, order, color, norm: str, floor: float) -> 
             line_x.append(t)
             line_y.append(y)
     if len(line_x) > 1:
-        ax.plot(line_x, line_y, color=color, linewidth=0.9, alpha=0.7, zorder=2)
+        ax.plot(line_x, line_y, color=color, linewidth=0.9, alpha=0.7, zorder=2, linestyle=_line_style(sub, config))
 
 
 def _legend_handles(df, configs, colors, order) -> list:
     from matplotlib.lines import Line2D
 
     handles = [
-        Line2D([], [], color=colors[c], marker="o", label=str(df.loc[df["config"] == c, "label"].iloc[0]))
+        Line2D(
+            [],
+            [],
+            color=colors[c],
+            marker="o",
+            linestyle=_line_style(df, c),
+            label=str(df.loc[df["config"] == c, "label"].iloc[0]),
+        )
         for c in configs
     ]
     names = {"exact": "exact (active set)", "default": "solver default"}
@@ -81,22 +105,23 @@ def work_precision_figure(df, figure_N: Sequence[int] = (), fig=None):
     """Algebraic error ``‖u_h^solver − u_h^exact‖`` (rows: ``L⁴``, ``W^{1,4}``) against solve time,
     log-log, one panel column per ``N`` of ``figure_N`` (default: coarsest, middle, finest).
 
-    One colour and line per solver configuration (its tolerances loose to tight), one marker
+    One colour and line per solver configuration (its tolerances loose to tight; dashed: the
+    PETSc peers), one marker
     per tolerance (star: the solver's default); hollow markers: inaccurate (KKT residual above
     the tolerance); ×: failed, drawn at the top at the time of failure.  The discretisation
     error of the mesh is the solid horizontal line, 10⁻⁴ of it (Table 1's fifth digit) the
     dotted one; an algebraic error of exactly 0 (the pipeline's own solve) sits on the bottom edge.
     ``df``: the rows of ``work_precision.csv``.  Returns the figure.
     """
-    import matplotlib
     from matplotlib.ticker import NullFormatter
 
     Ns = sorted(int(N) for N in df["N"].unique())
     cols = [int(N) for N in figure_N if int(N) in Ns] or sorted({Ns[0], Ns[len(Ns) // 2], Ns[-1]})
     configs = list(dict.fromkeys(df["config"]))
-    fig = fig if fig is not None else new_figure(figsize=(4.1 * len(cols), 7.6))
-    cmap = matplotlib.colormaps["tab10"]
-    colors = {c: cmap(k % 10) for k, c in enumerate(configs)}
+    ncol = 6 if len(configs) <= 10 else 4  # long labels of many configurations: fewer columns
+    legend_rows = -(-(len(configs) + 11) // ncol)  # configurations, tolerances and line keys
+    fig = fig if fig is not None else new_figure(figsize=(4.1 * len(cols), 6.4 + 0.22 * legend_rows))
+    colors = _config_colors(df)
     order = tolerance_order(df)
     axes = fig.subplots(len(FIGURE_NORMS), len(cols), squeeze=False, sharex="col")
     for i, norm in enumerate(FIGURE_NORMS):
@@ -123,10 +148,10 @@ def work_precision_figure(df, figure_N: Sequence[int] = (), fig=None):
             if j == 0:
                 ax.set_ylabel(f"algebraic error in {label_tex(norm, domain=False)}")
     fig.legend(
-        handles=_legend_handles(df, configs, colors, order), loc="lower center", ncol=6, fontsize=8, frameon=False
+        handles=_legend_handles(df, configs, colors, order), loc="lower center", ncol=ncol, fontsize=8, frameon=False
     )
     fig.suptitle(r"Work precision: $\|u_h^{\mathrm{solver}} - u_h^{\mathrm{exact}}\|$ against solve time")
-    fig.tight_layout(rect=(0, 0.13, 1, 0.97))
+    fig.tight_layout(rect=(0, 0.03 * legend_rows, 1, 0.97))
     return fig
 
 
@@ -161,8 +186,24 @@ def cost_panel(df, ax=None):
     return ax
 
 
+def _peer_lines(df, ax) -> None:
+    """Each PETSc peer's time to Table 1's digits against the unknowns (dashed), with its exponent."""
+    from signorini.paper import TABLE1_NORMS
+    from signorini.studies.work_precision.findings import peer_comparison
+
+    colors = _config_colors(df)
+    n_dofs = df.drop_duplicates("N").set_index("N")["n_dofs"]
+    for config, v in (peer_comparison(df, TABLE1_NORMS).get("scaling") or {}).items():
+        if not v["N"]:
+            continue
+        p = f" ($p$ = {v['exponent']:.2f})" if np.isfinite(v["exponent"]) else ""
+        x = [float(n_dofs[N]) for N in v["N"]]
+        ax.loglog(x, v["time_s"], marker=".", linestyle="--", color=colors[config], label=f"{v['label']}{p}")
+
+
 def time_panel(df, ax=None):
-    """Where the time goes: assembly and every exact solver configuration against the unknowns."""
+    """Where the time goes: assembly and every exact solver configuration against the unknowns;
+    dashed: each PETSc peer's time to Table 1's digits (``findings.peer_comparison``)."""
     ax = ax if ax is not None else new_figure(figsize=(5.5, 4.6)).subplots()
     ex, exact = _exact_runs(df)
     n = ex["n_dofs"].to_numpy(dtype=float)
@@ -170,13 +211,21 @@ def time_panel(df, ax=None):
     for config in dict.fromkeys(exact["config"]):
         sub = exact[exact["config"] == config].sort_values("N")
         ax.loglog(sub["n_dofs"], sub["time_s"], marker="o", label=f"solve: {sub['label'].iloc[0]}")
-    ax.loglog(n, float(ex["build_s"].iloc[0]) * n / n[0], linestyle="--", color="0.6", label=r"$\propto$ unknowns")
+    _peer_lines(df, ax)
+    ax.loglog(n, float(ex["build_s"].iloc[0]) * n / n[0], linestyle=":", color="0.6", label=r"$\propto$ unknowns")
     ax.set_xlabel("unknowns $(N+1)^2$")
     ax.set_ylabel("wall time [s]")
     ax.set_title("Where the time goes")
     ax.grid(True, which="major", linewidth=0.3, alpha=0.6)
-    ax.legend(fontsize=8, loc="upper left")
+    ax.legend(fontsize=6 if is_peer_table(df) else 8, loc="upper left", ncol=2 if is_peer_table(df) else 1)
     return ax
+
+
+def is_peer_table(df) -> bool:
+    """Whether the table holds PETSc peer runs."""
+    from signorini.studies.work_precision.findings import is_peer
+
+    return bool(is_peer(df).any())
 
 
 def cost_of_accuracy(df, fig=None):

@@ -192,6 +192,88 @@ def _closest_l4(df: pd.DataFrame, paper_l4: Mapping[int, float] | None) -> dict[
     return closest
 
 
+def is_peer(df: pd.DataFrame) -> pd.Series:
+    """The rows of PETSc peers (``solver`` ``petsc_snes``/``petsc_tao``; none without the column)."""
+    import pandas as pd
+
+    if "solver" not in df.columns:
+        return pd.Series(False, index=df.index)
+    return df["solver"].astype(str).str.startswith("petsc_")
+
+
+def _fit_exponent(n_dofs: Sequence[float], times: Sequence[float]) -> float:
+    """Least-squares slope of log time against log unknowns (NaN with fewer than 2 points)."""
+    if len(times) < 2:
+        return math.nan
+    return float(np.polyfit(np.log(np.asarray(n_dofs, dtype=float)), np.log(np.asarray(times, dtype=float)), 1)[0])
+
+
+def _peers(df: pd.DataFrame, Ns: Sequence[int], cheapest: Mapping[int, Mapping[str, dict]]) -> dict[str, Any]:
+    """Our cascade against the PETSc peers: per N the fastest peer run that keeps Table 1's
+    digits (status ``ok``) and its time over ours; per peer the time to those digits against the
+    number of unknowns (fit ``time ∝ unknowns^p``)."""
+    peers = df[is_peer(df)]
+    exact = df[df["tol_label"] == EXACT_LABEL]
+    if peers.empty or exact.empty:
+        return {}
+    ours_config = str(exact["config"].iloc[0])
+    n_dofs = df.drop_duplicates("N").set_index("N")["n_dofs"]
+    ratio = []
+    for N in Ns:
+        ours = cheapest.get(N, {}).get(ours_config)
+        runs = {c: v for c, v in cheapest.get(N, {}).items() if c in set(peers["config"])}
+        runs = {c: v for c, v in runs.items() if _status(df, N, c, v["tol_label"]) == "ok"}
+        best = min(runs.items(), key=lambda kv: kv[1]["time_s"]) if runs else None
+        ratio.append(
+            {
+                "N": N,
+                "ours_s": ours["time_s"] if ours else math.nan,
+                "peer": best[0] if best else None,
+                "peer_tol": best[1]["tol_label"] if best else None,
+                "peer_s": best[1]["time_s"] if best else math.nan,
+                "ratio": best[1]["time_s"] / ours["time_s"] if best and ours else math.nan,
+            }
+        )
+    scaling = {}
+    for config in dict.fromkeys(peers["config"]):
+        points = [
+            (N, float(n_dofs[N]), cheapest[N][config]["time_s"], cheapest[N][config]["tol_label"])
+            for N in Ns
+            if config in cheapest.get(N, {}) and _status(df, N, config, cheapest[N][config]["tol_label"]) == "ok"
+        ]
+        rows = peers[peers["config"] == config]
+        scaling[config] = {
+            "label": str(rows["label"].iloc[0]),
+            "N": [p[0] for p in points],
+            "time_s": [p[2] for p in points],
+            "tol_label": [p[3] for p in points],
+            "exponent": _fit_exponent([p[1] for p in points], [p[2] for p in points]),
+            "statuses": rows["status"].value_counts().to_dict(),
+            "reasons": sorted({str(r) for r in rows["converged_reason"] if str(r) and str(r) != "nan"}),
+        }
+    ours_rows = [r for r in ratio if math.isfinite(r["ours_s"])]
+    return {
+        "ours": ours_config,
+        "ours_label": str(exact["label"].iloc[0]),
+        "ours_exponent": _fit_exponent([float(n_dofs[r["N"]]) for r in ours_rows], [r["ours_s"] for r in ours_rows]),
+        "ratio": ratio,
+        "scaling": scaling,
+        "any_ok": bool((peers["status"] == "ok").any()),
+    }
+
+
+def peer_comparison(df: pd.DataFrame, table1_norms: Sequence[str]) -> dict[str, Any]:
+    """``findings(...)["peers"]`` alone (for the figures)."""
+    Ns = sorted(int(N) for N in df["N"].unique())
+    t1 = [n for n in table1_norms if f"total_{n}" in df.columns]
+    return _peers(df, Ns, _cheapest(df, Ns, t1))
+
+
+def _status(df: pd.DataFrame, N: int, config: str, tol_label: str) -> str:
+    rows = df[(df["N"] == N) & (df["config"] == config) & (df["tol_label"] == tol_label)]
+    return str(rows["status"].iloc[0]) if len(rows) else ""
+
+
 def _machine(df: pd.DataFrame) -> dict[str, Any]:
     """Load average at the measurements, wall-clock span of the jobs, their summed time, status counts."""
     load = df[df["status"] != "skipped"]["load1"].to_numpy(dtype=float)
@@ -229,19 +311,24 @@ def findings(
       ``L⁴``/``W^{1,4}`` errors against total time (assembly + solve) with the time factor per digit.
     - ``closest_l4``: per N with a published ``L⁴`` cell, the run whose total ``L⁴`` error is
       closest to it (relative deviation), next to the exact solution's deviation.
+    - ``peers``: our cascade against the PETSc peers (``_peers``): per N the fastest peer run
+      that keeps Table 1's digits with status ``ok``, its time and its ratio to ours; per peer
+      the time to those digits per N and the exponent ``p`` of ``time ∝ unknowns^p``.
     - ``load``/``span_s``/``job_time_s``/``counts``: the load average at the measurements, the
       wall-clock span of the measurement jobs, their summed run time and the status counts.
     """
     Ns = sorted(int(N) for N in df["N"].unique())
     t1 = [n for n in table1_norms if f"total_{n}" in df.columns]
     cells = _cell_changes(df, Ns, t1)
+    cheapest = _cheapest(df, Ns, t1)
     paper_rates = [paper_l4_eoc.get(N, math.nan) for N in Ns[1:]] if paper_l4_eoc else None
     return {
         "N": Ns,
         "table1_norms": t1,
         "cells": cells,
         "needed": _needed(cells),
-        "cheapest": _cheapest(df, Ns, t1),
+        "cheapest": cheapest,
+        "peers": _peers(df, Ns, cheapest),
         "eoc": _l4_eocs(df, Ns, paper_rates, paper_l4),
         "paper_l4_eoc": paper_rates,
         "exact": _exact_cost(df, Ns),

@@ -39,7 +39,7 @@ import re
 import tempfile
 import time
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -68,12 +68,14 @@ LOG_FILE_OPTIONS = {"HIGHS": "log_file"}  # solvers whose log can go to a file (
 
 @dataclass
 class Attempt:
-    """The outcome of one solver call: result (or None), status, reason and timings."""
+    """The outcome of one solver call: result (or None), status, reason, timings and extra
+    record fields (a peer's set-up time, converged reason and provenance)."""
 
     result: Any
     status: str
     reason: str
     times: list[float]
+    extra: dict = field(default_factory=dict)
 
 
 @contextlib.contextmanager
@@ -122,14 +124,21 @@ def run_solver(
     time_limit_s: float | None = None,
     repeat_below_s: float = REPEAT_BELOW_S,
     repeats: int = REPEATS,
+    peer=None,
 ) -> Attempt:
     """Solve ``disc`` (a ``DiscreteProblem``) with ``config`` at tolerance ``tol`` (None: the
-    solver's default; ignored by the active-set solver); never raises.
+    solver's default; ignored by the active-set solver); never raises.  A PETSc peer runs by
+    ``peer`` (a ``peers.PeerRoute``).
 
     Timing: wall time of the call; repeated (best of ``repeats``) when the first call takes
     less than ``repeat_below_s``.  The status compares the worst relative KKT residual with
     ``tol`` (or the solver's default tolerance, or the active-set certificate's 1e-10).
     """
+    if config.peer:
+        from signorini.studies.work_precision.peers import run_peer
+
+        out = run_peer(config, peer, disc, tol, time_limit_s, repeat_below_s, repeats)
+        return Attempt(out.result, out.status, out.reason, out.times, out.extra)
     from signorini.fem.solve import solve_discrete
     from signorini.solvers import cvxpy_solve
     from signorini.solvers.cvxpy_qp import TOLERANCE_OPTIONS
@@ -177,7 +186,7 @@ def run_solver(
 
 def _warm_up(config: SolverConfig) -> None:
     """Load the solver's libraries with a 3-unknown QP, so the first timed call pays no import."""
-    if config.exact:
+    if config.exact or config.peer:  # a peer starts a fresh process per run anyway
         return
     import scipy.sparse as sp
 
@@ -240,6 +249,7 @@ class _Inputs:
     build_s: float
     prev: dict[str, dict]
     conventions: Any  # fem.norms.Conventions
+    peer: Any = None  # peers.PeerRoute of a PETSc peer's job
 
 
 def _load_inputs(at: SceneMesh, inputs: Mapping[str, Any], conventions: Mapping | None) -> _Inputs:
@@ -277,17 +287,21 @@ def _base_record(inp: _Inputs, config: SolverConfig, tol: float | None) -> dict[
 
 
 def _measure(inp: _Inputs, config: SolverConfig, tol: float | None, time_limit: float | None, norm_cache: dict) -> dict:
-    """Run one (configuration, tolerance) and record its status, times, residuals and errors."""
+    """Run one (configuration, tolerance) and record its status, times, residuals and errors;
+    a failed run's answer (a peer stopped by an iteration limit) gets residuals and algebraic
+    errors, but no total errors: it is no candidate for Table 1."""
     from signorini.fem.norms import evaluate_norms
 
     names = list(inp.disc_err)
-    attempt = run_solver(config, inp.disc, tol, time_limit)
+    attempt = run_solver(config, inp.disc, tol, time_limit, peer=inp.peer)
+    times = attempt.times or [math.nan]
     record = {
         "status": attempt.status,
         "reason": attempt.reason,
-        "time_s": min(attempt.times) if attempt.result is not None else attempt.times[-1],
+        "time_s": min(times) if attempt.result is not None else times[-1],
         "time_runs": len(attempt.times),
         "times": " ".join(f"{t:.6g}" for t in attempt.times),
+        **attempt.extra,
     }
     res = attempt.result
     if res is not None:
@@ -298,10 +312,12 @@ def _measure(inp: _Inputs, config: SolverConfig, tol: float | None, time_limit: 
             **{f"kkt_{k}": float(v) for k, v in res.certificate.as_dict().items() if k not in ("ok", "tol")},
         )
         alg = p1_norms(inp.disc.mesh, res.u - inp.exact, names, inp.conventions)
+        record.update({f"alg_{n}": alg[n] for n in names})
+        if attempt.status == "failed":
+            return record
         key = _fingerprint(res.u)
         if key not in norm_cache:
             norm_cache[key] = evaluate_norms(inp.disc.problem, inp.disc.mesh, res.u, names, inp.conventions)
-        record.update({f"alg_{n}": alg[n] for n in names})
         record.update({f"total_{n}": norm_cache[key][n] for n in names})
     return record
 
@@ -315,6 +331,7 @@ def measure_stage(
     out_json: str | os.PathLike,
     conventions: Mapping | None = None,
     growth_exponent: float = GROWTH_EXPONENT,
+    peer_python: str | None = None,
 ) -> dict:
     """Stage ``work_precision_measure``: run one solver configuration (``SolverConfig.as_dict()``)
     on one mesh of the scene (``at``) at its default and at every tolerance of ``tolerances``; save the records (see
@@ -324,13 +341,21 @@ def measure_stage(
     ``exact`` (its solution), ``disc`` (its norm artifacts of this mesh, norm → path: the
     discretisation errors, which also define the norms measured) and ``prev`` (this
     configuration's artifact on the previous mesh, or None, for ``skip_reason``).
-    ``time_limit_s`` limits each QP solve (the solver's own option) and drives ``skip_reason``
-    (for every configuration, the active-set ones included).
+    ``time_limit_s`` limits each QP solve (the solver's own option; a peer's process is killed
+    after it plus ``peers.START_SLACK_S``) and drives ``skip_reason`` (for every configuration,
+    the active-set ones included).  A PETSc peer runs ``inputs["peer_driver"]`` under
+    ``peer_python``; its probe (PETSc version, inner solvers) is saved with the records.
     """
     started, t_job, load_start = time.time(), time.perf_counter(), os.getloadavg()[0]
     config = SolverConfig(**config)
     time_limit = float(time_limit_s) if time_limit_s is not None else None
     inp = _load_inputs(at, inputs, conventions)
+    if config.peer:
+        from signorini.studies.work_precision.peers import PeerRoute, probe
+        from signorini.studies.work_precision.study import PEER_PYTHON
+
+        python, driver = peer_python or PEER_PYTHON, str(inputs["peer_driver"])
+        inp.peer = PeerRoute(python, driver, str(inputs["system"]), probe(python, driver))
     _warm_up(config)
     norm_cache: dict[str, dict[str, float]] = {_fingerprint(inp.exact): inp.disc_err}
     records = []
@@ -357,6 +382,7 @@ def measure_stage(
         "time_limit_s": time_limit,
         "growth_exponent": float(growth_exponent),
         "records": records,
+        **({"peer": inp.peer.probe} if inp.peer is not None else {}),
         "job": {
             "started": started,
             "wall_s": wall_s,

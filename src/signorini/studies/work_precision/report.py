@@ -119,6 +119,7 @@ def _brief(df, found: Mapping, labels: Mapping[str, str]) -> list[str]:
         ranked = sorted(cheap.items(), key=lambda kv: kv[1]["time_s"])
         runs = "; ".join(f"{labels.get(c, c)} ({v['tol_label']}) {fmt_time(v['time_s'])}" for c, v in ranked)
         lines.append(f"- **Fastest route to Table 1's digits at N = {Ns[-1]}:** {runs}.")
+    lines += _peer_brief(found, labels)
     lines += _eoc_brief(found)
     closest = found.get("closest_l4", {})
     if closest:
@@ -131,6 +132,72 @@ def _brief(df, found: Mapping, labels: Mapping[str, str]) -> list[str]:
     if "slope_L4" in exact:
         lines.append(COST.format(**exact))
     return lines
+
+
+PEERS_INTRO = (
+    "PETSc {version}: SNES variational-inequality and TAO bound-constrained solvers on the same assembled system, "
+    "run by `workflow/peers/petsc_peer.py` under the system interpreter (petsc4py). Time: the `solve` call from "
+    "u = 0 (best of 3 when under 1 s); the set-up (matrix, vectors, solver, `setFromOptions`, `setUp`) is the "
+    "`setup_s` column of the CSV. Each answer passes our KKT certificate like every other; `failed` carries "
+    "PETSc's converged reason. Tolerance: every stopping tolerance of the method (SNES `rtol`, `stol`; TAO "
+    "`gttol`; the inner Krylov `rtol`) set to it."
+)
+
+
+def _peer_brief(found: Mapping, labels: Mapping[str, str]) -> list[str]:
+    peers = found.get("peers") or {}
+    rows = [r for r in peers.get("ratio", []) if r["peer"] is not None and math.isfinite(r["ratio"])]
+    if not rows:
+        return []
+    runs = "; ".join(
+        f"N = {r['N']}: {labels.get(r['peer'], r['peer'])} ({r['peer_tol']}) {fmt_time(r['peer_s'])} against "
+        f"{fmt_time(r['ours_s'])}, ×{r['ratio']:.1f}"
+        for r in rows
+    )
+    fits = [
+        f"{v['label']} p = {v['exponent']:.2f}" for v in peers["scaling"].values() if math.isfinite(v["exponent"])
+    ]
+    line = (
+        f"- **PETSc peers.** Fastest PETSc method to Table 1's digits (status ok) per mesh, against "
+        f"{peers['ours_label']} (time of the PETSc method / ours): {runs}."
+    )
+    fit = f"  Time to Table 1's digits grows like unknowns^p: {peers['ours_label']} p = {peers['ours_exponent']:.2f}"
+    return [line, fit + (f"; {'; '.join(fits)}." if fits else ".")]
+
+
+def _peer_tables(df, found: Mapping) -> list[str]:
+    peers = found.get("peers") or {}
+    if not peers:
+        return []
+    Ns = list(found["N"])
+    versions = [str(v).split(":")[0] for v in df.get("peer_info", []) if isinstance(v, str) and v.startswith("PETSc")]
+    lines = ["## PETSc peers", "", PEERS_INTRO.format(version=versions[0].removeprefix("PETSc ") if versions else "")]
+    header = ["N", peers["ours_label"], "fastest PETSc method (tolerance)", "its time", "PETSc / ours"]
+    rows = [
+        [
+            str(r["N"]),
+            fmt_time(r["ours_s"]),
+            "—" if r["peer"] is None else f"{peers['scaling'][r['peer']]['label']} ({r['peer_tol']})",
+            fmt_time(r["peer_s"]),
+            f"×{r['ratio']:.1f}" if math.isfinite(r["ratio"]) else "—",
+        ]
+        for r in peers["ratio"]
+    ]
+    lines += ["", md_table(header, rows)]
+    header = ["PETSc method", *(f"N = {N}" for N in Ns), "p (time ∝ unknowns^p)", "statuses", "PETSc reasons"]
+    rows = []
+    for v in peers["scaling"].values():
+        at = dict(zip(v["N"], zip(v["time_s"], v["tol_label"], strict=True), strict=True))
+        cells = [f"{fmt_time(at[N][0])} ({at[N][1]})" if N in at else "—" for N in Ns]
+        statuses = ", ".join(f"{k} {n}" for k, n in sorted(v["statuses"].items()))
+        p = f"{v['exponent']:.2f}" if math.isfinite(v["exponent"]) else "—"
+        rows.append([v["label"], *cells, p, statuses, ", ".join(v["reasons"]) or "—"])
+    intro = (
+        "Per PETSc method: the fastest run per mesh whose total errors print like the exact ones (status ok; "
+        "tolerance in brackets), the least-squares exponent of that time against the number of unknowns, the "
+        "statuses of all its runs and PETSc's converged reasons."
+    )
+    return [*lines, "", intro, "", md_table(header, rows)]
 
 
 def _table1_digits(found: Mapping) -> list[str]:
@@ -275,7 +342,7 @@ def work_precision_md(df, found: Mapping, source: str = "paper") -> str:
     ``findings.findings``; ``source``: the scene whose exact solutions were reused."""
     labels = dict(zip(df["config"], df["label"], strict=False))
     lines = [HEADER, *_setup(df, found, source), "", "## Findings", "", *_brief(df, found, labels)]
-    lines += _table1_digits(found) + _time_to_digits(df, found, labels) + _eoc_table(found)
+    lines += _table1_digits(found) + _time_to_digits(df, found, labels) + _peer_tables(df, found) + _eoc_table(found)
     lines += _cost_table(found) + _failures(df)
     return "\n".join(lines).rstrip() + "\n"
 

@@ -13,6 +13,10 @@ from signorini.paper import FIGURE3_NORMS
 FIGURE_NORMS = FIGURE3_NORMS  # the panel rows of work_precision.{pdf,png}
 EXACT_LABEL = "exact"  # the tolerance label of the exact (active-set) runs
 GROWTH_EXPONENT = 1.5  # predicted time ∝ (number of unknowns)^GROWTH_EXPONENT
+# PETSc peers, run by an external interpreter with petsc4py (studies.work_precision.peers):
+# solver name → the kind of PETSc object the driver builds
+PEER_SOLVERS = {"petsc_snes": "snes", "petsc_tao": "tao"}
+PEER_PYTHON = "/usr/bin/python3"  # Debian's python3-petsc4py-real is built for it
 
 
 class StudyConfigError(ValueError):
@@ -21,9 +25,10 @@ class StudyConfigError(ValueError):
 
 @dataclass(frozen=True)
 class SolverConfig:
-    """One solver configuration: ``solver`` is ``active_set`` or a cvxpy QP solver (upper case);
-    ``options`` go to ``solve_discrete`` (active set: ``warm_start``, ``backend``, …) or
-    ``cvxpy_solve`` (solver options such as ``polishing``)."""
+    """One solver configuration: ``solver`` is ``active_set``, a cvxpy QP solver (upper case) or a
+    PETSc peer (``petsc_snes``, ``petsc_tao``); ``options`` go to ``solve_discrete`` (active set:
+    ``warm_start``, ``backend``, …), ``cvxpy_solve`` (solver options such as ``polishing``) or
+    into PETSc's options database (``snes_type``, ``pc_type``, …, without the dash)."""
 
     name: str
     solver: str
@@ -33,6 +38,11 @@ class SolverConfig:
     @property
     def exact(self) -> bool:
         return self.solver == "active_set"
+
+    @property
+    def peer(self) -> bool:
+        """A PETSc method, run by the external driver (``peers``)."""
+        return self.solver in PEER_SOLVERS
 
     def as_dict(self) -> dict:
         return {"name": self.name, "solver": self.solver, "label": self.label, "options": dict(self.options)}
@@ -48,7 +58,7 @@ def study_configs(study: Mapping, installed: Sequence[str] = ()) -> dict[str, So
     out: dict[str, SolverConfig] = {}
     for name, spec in (study.get("configs") or {}).items():
         solver = str(spec["solver"])
-        solver = solver if solver == "active_set" else solver.upper()
+        solver = solver if solver == "active_set" or solver in PEER_SOLVERS else solver.upper()
         out[name] = SolverConfig(name, solver, str(spec.get("label", name)), dict(spec.get("options") or {}))
     qp = study.get("qp_solvers", [])
     if qp == "installed":

@@ -30,6 +30,9 @@ ID_COLUMNS = [
     "time_runs",
     "times",
     "solver_time_s",
+    "setup_s",
+    "converged_reason",
+    "peer_info",
     "iterations",
     "n_active",
     "kkt_stationarity",
@@ -68,10 +71,13 @@ def read_measurements(path: str | os.PathLike) -> pd.DataFrame:
     import pandas as pd
 
     try:
-        df = pd.read_csv(path, dtype={"reason": str, "times": str, "tol_label": str}, keep_default_na=True)
+        dtype = {"reason": str, "times": str, "tol_label": str, "converged_reason": str, "peer_info": str}
+        df = pd.read_csv(path, dtype=dtype, keep_default_na=True)
     except (OSError, ValueError) as err:
         raise CorruptArtifactError(f"{path}: unreadable CSV ({err})") from err
     df["reason"] = df["reason"].fillna("")
+    df["converged_reason"] = df["converged_reason"].fillna("")
+    df["peer_info"] = df["peer_info"].fillna("")
     return df
 
 

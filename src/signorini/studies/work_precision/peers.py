@@ -1,0 +1,183 @@
+"""PETSc's variational-inequality (SNES ``vinewtonrsls``, ``vinewtonssls``) and bound-constrained
+(TAO ``tron``, ``gpcg``, ``bnls``, ``bqpip``, ``blmvm``) solvers as peers of the work-precision study.
+
+They run as an external program, ``workflow/peers/petsc_peer.py`` (stdlib, numpy and petsc4py;
+``pipeline.paths.PEER_DRIVER``), under an interpreter that has petsc4py (the study's
+``peer_python``, default ``/usr/bin/python3`` with Debian's ``python3-petsc4py-real``): it reads
+the cached ``system.npz`` of the source scene and writes the solution and PETSc's own account
+(converged reason, iterations, setup and solve times, the solver types it actually used).  This
+module starts it and turns its answer into a ``SolveResult`` certified like every other answer
+(``solvers.certificate.kkt_certificate`` with ``λ = (Au − b)_B``), so the study treats the peers
+exactly like its other configurations.  When the interpreter or petsc4py is missing, or PETSc
+lacks an inner solver (hypre, MUMPS, CHOLMOD), the runs are ``skipped`` with that reason.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import tempfile
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from signorini.studies.work_precision.study import PEER_PYTHON, PEER_SOLVERS, SolverConfig
+
+DEFAULT_TOL = 1e-8  # PETSc's default snes_rtol and tao_gatol/grtol: what a default run must reach
+PROBE_TIMEOUT_S = 120.0
+START_SLACK_S = 60.0  # interpreter start, import and matrix set-up on top of the solve's time limit
+
+
+@dataclass
+class PeerRoute:
+    """How to run the driver: interpreter, driver script, the system archive it reads, and what
+    its probe found (``available``: PETSc runs here; ``reason``: why not)."""
+
+    python: str
+    driver: str
+    system: str
+    probe: dict = field(default_factory=dict)
+
+    @property
+    def available(self) -> bool:
+        return bool(self.probe.get("petsc4py"))
+
+    @property
+    def reason(self) -> str:
+        return str(self.probe.get("error", ""))
+
+
+def probe(python: str | None, driver: str | os.PathLike) -> dict:
+    """The driver's ``probe`` under ``python``: PETSc version and inner solvers, or
+    ``{"petsc4py": False, "error": why}`` (interpreter missing, petsc4py not importable, …)."""
+    python = python or PEER_PYTHON
+    if not Path(python).exists():
+        return {"petsc4py": False, "error": f"peer interpreter {python} not found"}
+    try:
+        proc = subprocess.run(
+            [python, str(driver), "probe"], capture_output=True, text=True, timeout=PROBE_TIMEOUT_S, env=_env()
+        )
+    except (OSError, subprocess.TimeoutExpired) as err:
+        return {"petsc4py": False, "error": f"peer interpreter {python}: {type(err).__name__}: {err}"}
+    if proc.returncode != 0:
+        return {"petsc4py": False, "error": f"{python} {Path(driver).name} probe: {_last_line(proc.stderr)}"}
+    return json.loads(proc.stdout)
+
+
+def _env() -> dict[str, str]:
+    """The driver's environment: one BLAS/OpenMP thread, like every job (no oversubscription)."""
+    env = dict(os.environ)
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        env.setdefault(var, "1")
+    return env
+
+
+def _last_line(text: str) -> str:
+    lines = [" ".join(line.split()) for line in text.splitlines() if line.strip()]
+    return (lines[-1] if lines else "no output")[:300]
+
+
+@dataclass
+class PeerOutcome:
+    """What one driver run gave: result (or None), status, reason, solve times, extra record fields."""
+
+    result: Any
+    status: str
+    reason: str
+    times: list[float]
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+def run_peer(
+    config: SolverConfig,
+    route: PeerRoute,
+    disc,
+    tol: float | None,
+    time_limit_s: float | None,
+    repeat_below_s: float,
+    repeats: int,
+) -> PeerOutcome:
+    """Run ``config`` (a peer) at tolerance ``tol`` (None: PETSc's defaults) on ``route.system``;
+    certify its answer against ``disc`` (``A``, ``b``, ``boundary``).  Never raises."""
+    if not route.available:
+        return PeerOutcome(None, "skipped", route.reason, [])
+    request = {
+        "kind": PEER_SOLVERS[config.solver],
+        "options": dict(config.options),
+        "tol": None if tol is None else float(tol),
+        "repeat_below_s": float(repeat_below_s),
+        "repeats": int(repeats),
+    }
+    timeout = None if time_limit_s is None else float(time_limit_s) + START_SLACK_S
+    with tempfile.TemporaryDirectory(prefix="wp-peer-") as tmp:
+        (Path(tmp) / "request.json").write_text(json.dumps(request))
+        command = [route.python, route.driver, "solve", route.system, str(Path(tmp) / "request.json"), tmp]
+        try:
+            proc = subprocess.run(command, capture_output=True, text=True, timeout=timeout, env=_env())
+        except subprocess.TimeoutExpired:
+            return PeerOutcome(None, "failed", f"time limit ({time_limit_s:g} s)", [float(timeout or 0.0)])
+        if proc.returncode != 0 or not (Path(tmp) / "result.json").exists():
+            return PeerOutcome(None, "failed", f"driver exited {proc.returncode}: {_last_line(proc.stderr)}", [])
+        answer = json.loads((Path(tmp) / "result.json").read_text())
+        u = np.load(Path(tmp) / "solution.npz")["u"] if answer.get("status") == "done" else None
+    return _outcome(config, disc, tol, answer, u)
+
+
+def _outcome(config: SolverConfig, disc, tol: float | None, answer: dict, u) -> PeerOutcome:
+    """Status, certificate and record fields of a driver's answer."""
+    extra = {
+        "setup_s": float(answer["setup_s"]) if "setup_s" in answer else float("nan"),
+        "converged_reason": str(answer.get("converged_reason", "")),
+        "peer_info": peer_info(answer),
+        "peer": {k: answer.get(k) for k in ("petsc_version", "options", "effective", "python", "setup_times")},
+    }
+    if answer.get("status") == "unavailable":
+        return PeerOutcome(None, "skipped", str(answer["reason"]), [], extra)
+    if answer.get("status") != "done":
+        return PeerOutcome(None, "failed", str(answer.get("reason", answer.get("status"))), [], extra)
+    required = DEFAULT_TOL if tol is None else float(tol)
+    result = peer_result(config.name, disc.A, disc.b, disc.boundary, u, required, answer)
+    times = [float(t) for t in answer["solve_times"]]
+    if not answer["converged"]:
+        return PeerOutcome(result, "failed", f"PETSc {answer['converged_reason']}", times, extra)
+    worst = result.certificate.worst
+    if not np.isfinite(worst) or worst > required:
+        reason = f"KKT residual {worst:.1e} > tolerance {required:.0e}"
+        return PeerOutcome(result, "inaccurate", reason, times, extra)
+    return PeerOutcome(result, "ok", "", times, extra)
+
+
+def peer_info(answer: Mapping) -> str:
+    """``PETSc 3.18.5: vinewtonrsls ksp=cg pc=hypre/boomeramg``: the version and the solver types
+    PETSc actually used (what the CSV shows; the options are in the JSON records)."""
+    eff = answer.get("effective") or {}
+    if "petsc_version" not in answer:
+        return ""
+    pc = eff.get("pc_type")
+    inner = eff.get("factor_solver_type") or eff.get("hypre_type")
+    kinds = f" ksp={eff.get('ksp_type')} pc={pc}{'/' + inner if inner else ''}" if pc else ""
+    return f"PETSc {answer['petsc_version']}: {eff.get('type', '')}{kinds}"
+
+
+def peer_result(name: str, A, b: np.ndarray, boundary: np.ndarray, u: np.ndarray, tol: float, answer: dict):
+    """A ``SolveResult`` of a peer's ``u``: multiplier ``(Au − b)_B``, contact set ``{i ∈ B: u_i ≤ 0}``
+    and the KKT certificate at ``tol``."""
+    from signorini.solvers.certificate import kkt_certificate
+    from signorini.solvers.result import SolveResult
+
+    lam = (A @ u - b)[boundary]
+    certificate = kkt_certificate(A, b, boundary, u, lam, tol)
+    return SolveResult(
+        u=u,
+        lam=lam,
+        active=boundary[u[boundary] <= 0.0],
+        iterations=int(answer["iterations"]),
+        wall_time_s=float(answer["solve_s"]),
+        certificate=certificate,
+        solver=name,
+        info={"solve_time_s": float(answer["solve_s"]), "setup_s": float(answer["setup_s"])},
+    )

@@ -1,0 +1,329 @@
+#!/usr/bin/env python3
+"""Solve the discrete Signorini problem with PETSc: SNES variational-inequality solvers and TAO
+bound-constrained optimisers, as peers of the work-precision study.
+
+    min ½ uᵀAu − bᵀu  subject to  u_i ≥ 0 for the constrained nodes i
+
+is handed to PETSc either as the variational inequality ``F(u) = Au − b`` with bounds (SNES
+``vinewtonrsls``, ``vinewtonssls``) or as the bound-constrained minimisation of the quadratic with
+gradient ``Au − b`` and Hessian ``A`` (TAO ``tron``, ``gpcg``, ``bnls``, ``bqpip``, ``blmvm``, …).
+
+Runs under any interpreter that has numpy and petsc4py (Debian 12: ``apt-get install
+python3-petsc4py-real``, used by ``/usr/bin/python3``); it imports nothing of the project.
+
+    petsc_peer.py probe
+        JSON on stdout: PETSc version and which inner solvers work here (hypre, GAMG, CHOLMOD,
+        MUMPS, SuperLU, PETSc's own factorisation), each tried on a small system.
+    petsc_peer.py solve SYSTEM.npz REQUEST.json OUTDIR
+        SYSTEM.npz: the ``discretise`` archive (``data``, ``indices``, ``indptr``, ``shape``,
+        ``b``, ``boundary``).  REQUEST.json: ``kind`` (``snes`` or ``tao``), ``options`` (PETSc
+        options database, without the leading dash), ``tol`` (null: PETSc's defaults),
+        ``repeat_below_s``, ``repeats``.  Writes OUTDIR/solution.npz (``u``) and
+        OUTDIR/result.json (status, converged reason, iterations, setup and solve times, the
+        effective solver types, PETSc version).
+
+Tolerance ``tol`` sets every stopping tolerance of the method to it: SNES ``snes_rtol`` and
+``snes_stol`` (relative residual and step), TAO ``tao_gttol`` (projected gradient relative to
+the initial one) with ``tao_gatol = tao_grtol = 0``, and the relative tolerance of an inner
+Krylov solver (``ksp_rtol``; inexact Newton steps).  Timing: ``setup_s`` is the creation of the
+matrix, vectors and solver with ``setFromOptions`` and ``setUp``; ``solve_s`` the ``solve`` call
+from ``u = 0``.  A first solve under ``repeat_below_s`` is repeated (fresh objects each time).
+"""
+
+from __future__ import annotations
+
+import glob
+import importlib
+import json
+import os
+import sys
+import time
+
+import numpy as np
+
+# Debian's petsc4py finds its modules through $PETSC_DIR, else through the /usr/lib/petsc
+# alternative, which only the PETSc development package creates
+PETSC_DIRS = "/usr/lib/petscdir/*/*-real"
+FACTOR_PACKAGES = {"cholmod": "cholesky", "mumps": "cholesky", "superlu": "lu", "petsc": "cholesky"}
+
+
+def import_petsc():
+    """petsc4py's ``PETSc`` module, setting ``PETSC_DIR`` to Debian's real build when unset."""
+    try:
+        from petsc4py import PETSc
+
+        return PETSc
+    except ImportError:
+        candidates = sorted(glob.glob(PETSC_DIRS))
+        if os.environ.get("PETSC_DIR") or not candidates:
+            raise
+    os.environ["PETSC_DIR"] = candidates[-1]
+    sys.path.append(os.path.join(candidates[-1], "lib", "python3", "dist-packages"))
+    importlib.invalidate_caches()
+    from petsc4py import PETSc
+
+    return PETSc
+
+
+def _not_importable(err: Exception) -> str:
+    return f"petsc4py not importable by {sys.executable}: {type(err).__name__}: {err}"
+
+
+def _tiny_system(PETSc, n: int = 50):
+    """A 1-D Laplacian plus identity (SPD) and a right-hand side: the probe's test system."""
+    A = PETSc.Mat().createAIJ([n, n], nnz=3, comm=PETSc.COMM_SELF)
+    for i in range(n):
+        A.setValue(i, i, 3.0)
+        if i > 0:
+            A.setValue(i, i - 1, -1.0)
+        if i + 1 < n:
+            A.setValue(i, i + 1, -1.0)
+    A.assemble()
+    b = A.createVecLeft()
+    b.set(1.0)
+    return A, b
+
+
+def try_inner(PETSc, pc_type: str, factor: str | None = None) -> str:
+    """'' when a KSP with this preconditioner (and factorisation package) solves a small
+    system here, else PETSc's error message."""
+    A, b = _tiny_system(PETSc)
+    ksp = PETSc.KSP().create(comm=PETSc.COMM_SELF)
+    try:
+        ksp.setOperators(A)
+        ksp.setType("cg" if factor is None else "preonly")
+        ksp.setTolerances(rtol=1e-10)
+        pc = ksp.getPC()
+        pc.setType(pc_type)
+        if factor is not None:
+            pc.setFactorSolverType(factor)
+        x = b.duplicate()
+        ksp.solve(b, x)
+        r = b.duplicate()
+        A.mult(x, r)
+        r.axpy(-1.0, b)
+        return "" if r.norm() <= 1e-6 * b.norm() else f"residual {r.norm():.1e} after the solve"
+    except PETSc.Error as err:
+        return " ".join(str(err).split())[:200] or f"PETSc error {err.ierr}"
+    finally:
+        ksp.destroy()
+
+
+def probe() -> dict:
+    """What this PETSc offers: version and every inner solver the peers may ask for."""
+    try:
+        PETSc = import_petsc()
+    except Exception as err:  # ImportError, or a petsc4py built against another numpy (ValueError)
+        return {"petsc4py": False, "error": _not_importable(err)}
+    inner = {"hypre": try_inner(PETSc, "hypre"), "gamg": try_inner(PETSc, "gamg")}
+    for package, pc_type in FACTOR_PACKAGES.items():
+        inner[package] = try_inner(PETSc, pc_type, package)
+    return {
+        "petsc4py": True,
+        "python": sys.executable,
+        "petsc_version": ".".join(str(v) for v in PETSc.Sys.getVersion()),
+        "petsc_dir": os.environ.get("PETSC_DIR", ""),
+        "available": sorted(k for k, v in inner.items() if not v),
+        "unavailable": {k: v for k, v in inner.items() if v},
+    }
+
+
+def required_inner(options: dict) -> list[str]:
+    """The inner solvers (probe names) a set of options asks for."""
+    need = []
+    for key, value in options.items():
+        value = str(value).lower()
+        if key.endswith("pc_type") and value in ("hypre", "gamg"):
+            need.append(value)
+        if key.endswith("pc_factor_mat_solver_type"):
+            need.append(value)
+    return need
+
+
+def missing_inner(PETSc, options: dict) -> str:
+    """'' when every inner solver the options ask for works here, else which one and why not."""
+    for inner in required_inner(options):
+        if inner in ("hypre", "gamg"):
+            message = try_inner(PETSc, inner)
+        else:
+            message = try_inner(PETSc, FACTOR_PACKAGES.get(inner, "lu"), inner)
+        if message:
+            return f"{inner}: {message}"
+    return ""
+
+
+def load_system(path: str, PETSc):
+    """A (AIJ, symmetric), b, lower and upper bounds from a ``discretise`` archive."""
+    with np.load(path, allow_pickle=False) as d:
+        data, indices, indptr = d["data"], d["indices"], d["indptr"]
+        shape, rhs, boundary = tuple(int(s) for s in d["shape"]), d["b"], d["boundary"]
+    A = PETSc.Mat().createAIJ(
+        shape, csr=(indptr.astype(PETSc.IntType), indices.astype(PETSc.IntType), data), comm=PETSc.COMM_SELF
+    )
+    A.setOption(PETSc.Mat.Option.SYMMETRIC, True)
+    A.setOption(PETSc.Mat.Option.SPD, True)
+    A.assemble()
+    b = PETSc.Vec().createWithArray(np.array(rhs, dtype=float), comm=PETSc.COMM_SELF)
+    low = np.full(shape[0], PETSc.NINFINITY)
+    low[boundary] = 0.0
+    lb = PETSc.Vec().createWithArray(low, comm=PETSc.COMM_SELF)
+    ub = PETSc.Vec().createWithArray(np.full(shape[0], PETSc.INFINITY), comm=PETSc.COMM_SELF)
+    return A, b, lb, ub
+
+
+def make_snes(PETSc, A, b, lb, ub):
+    """SNES for the variational inequality F(u) = Au − b, bounds lb ≤ u ≤ ub."""
+
+    def residual(snes, x, f):
+        A.mult(x, f)
+        f.axpy(-1.0, b)
+
+    def jacobian(snes, x, J, P):  # constant: A itself
+        return None
+
+    snes = PETSc.SNES().create(comm=PETSc.COMM_SELF)
+    snes.setFunction(residual, b.duplicate())
+    snes.setJacobian(jacobian, A, A)
+    snes.setVariableBounds(lb, ub)
+    snes.setFromOptions()
+    return snes
+
+
+def make_tao(PETSc, A, b, lb, ub):
+    """TAO minimising ½ uᵀAu − bᵀu with bounds lb ≤ u ≤ ub (gradient Au − b, Hessian A)."""
+
+    def objective_gradient(tao, x, g):
+        A.mult(x, g)
+        value = 0.5 * g.dot(x) - b.dot(x)
+        g.axpy(-1.0, b)
+        return value
+
+    def hessian(tao, x, H, P):  # constant: A itself
+        return None
+
+    tao = PETSc.TAO().create(comm=PETSc.COMM_SELF)
+    tao.setObjectiveGradient(objective_gradient, b.duplicate())
+    tao.setHessian(hessian, A, A)
+    tao.setVariableBounds(lb, ub)
+    tao.setFromOptions()
+    return tao
+
+
+def tolerance_options(kind: str, tol: float | None) -> dict:
+    """The options that set every stopping tolerance of the method to ``tol``."""
+    if tol is None:
+        return {}
+    if kind == "snes":
+        return {"snes_rtol": tol, "snes_stol": tol, "ksp_rtol": tol}
+    # the inner Krylov solver: no prefix for TRON, GPCG and BQPIP, tao_bnk_ for BNLS/BNTR/BNTL
+    return {"tao_gttol": tol, "tao_gatol": 0.0, "tao_grtol": 0.0, "ksp_rtol": tol, "tao_bnk_ksp_rtol": tol}
+
+
+def _effective(PETSc, kind: str, solver) -> dict:
+    """The solver types PETSc actually used (a mistyped option shows up here)."""
+    ksp = solver.getKSP()
+    out = {"type": solver.getType(), "ksp_type": None, "pc_type": None}
+    if ksp is not None and ksp.handle:
+        pc = ksp.getPC()
+        out.update(ksp_type=ksp.getType(), pc_type=pc.getType(), ksp_rtol=ksp.getTolerances()[0])
+        if pc.getType() in ("lu", "cholesky"):
+            out["factor_solver_type"] = pc.getFactorSolverType()
+        if pc.getType() == "hypre":
+            out["hypre_type"] = pc.getHYPREType()
+    return out
+
+
+def _reason_name(PETSc, kind: str, code: int) -> str:
+    names = PETSc.SNES.ConvergedReason if kind == "snes" else PETSc.TAO.Reason
+    found = [k for k, v in vars(names).items() if v == code and k.isupper() and k != "ITERATING"]
+    return found[0] if found else str(code)
+
+
+def solve_once(PETSc, system: str, kind: str) -> dict:
+    """One solve from u = 0 with fresh objects: setup and solve times, reason, iterations, u."""
+    t0 = time.perf_counter()
+    A, b, lb, ub = load_system(system, PETSc)
+    solver = (make_snes if kind == "snes" else make_tao)(PETSc, A, b, lb, ub)
+    x = b.duplicate()
+    x.set(0.0)
+    solver.setSolution(x)
+    solver.setUp()
+    t1 = time.perf_counter()
+    solver.solve(None, x) if kind == "snes" else solver.solve(x)
+    t2 = time.perf_counter()
+    code = int(solver.getConvergedReason())
+    out = {
+        "setup_s": t1 - t0,
+        "solve_s": t2 - t1,
+        "reason_code": code,
+        "converged_reason": _reason_name(PETSc, kind, code),
+        "converged": code > 0,
+        "iterations": int(solver.getIterationNumber()),
+        "effective": _effective(PETSc, kind, solver),
+        "u": x.getArray().copy(),
+    }
+    if kind == "snes":
+        out["linear_iterations"] = int(solver.getLinearSolveIterations())
+    solver.destroy()
+    return out
+
+
+def solve(system: str, request: dict, outdir: str) -> dict:
+    """Run the request (see the module docstring), write solution.npz and result.json."""
+    kind, tol = request["kind"], request.get("tol")
+    options = {**request.get("options", {}), **tolerance_options(kind, tol)}
+    result: dict = {"kind": kind, "tol": tol, "options": options, "python": sys.executable}
+    try:
+        PETSc = import_petsc()
+    except Exception as err:
+        result.update(status="unavailable", reason=_not_importable(err))
+        return _write(outdir, result, None)
+    result["petsc_version"] = ".".join(str(v) for v in PETSc.Sys.getVersion())
+    missing = missing_inner(PETSc, options)
+    if missing:
+        result.update(status="unavailable", reason=f"PETSc {result['petsc_version']} here has no {missing}")
+        return _write(outdir, result, None)
+    db = PETSc.Options()
+    for key, value in options.items():
+        db.setValue(key, str(value))
+    repeats, repeat_below_s = int(request.get("repeats", 3)), float(request.get("repeat_below_s", 1.0))
+    runs: list[dict] = []
+    try:
+        runs.append(solve_once(PETSc, system, kind))
+        while len(runs) < repeats and runs[0]["solve_s"] < repeat_below_s:
+            runs.append(solve_once(PETSc, system, kind))
+    except PETSc.Error as err:  # e.g. an inner solver that cannot follow the changing active set
+        lines = [" ".join(line.split()) for line in str(err).splitlines() if line.strip()]
+        result.update(status="error", reason=f"PETSc error {err.ierr}: {lines[-1] if lines else ''}"[:300])
+        return _write(outdir, result, None)
+    best = min(runs, key=lambda r: r["solve_s"])
+    result.update({k: v for k, v in best.items() if k != "u"}, status="done")
+    result["solve_times"] = [r["solve_s"] for r in runs]
+    result["setup_times"] = [r["setup_s"] for r in runs]
+    return _write(outdir, result, best["u"])
+
+
+def _write(outdir: str, result: dict, u) -> dict:
+    os.makedirs(outdir, exist_ok=True)
+    if u is not None:
+        np.savez(os.path.join(outdir, "solution.npz"), u=u)
+    with open(os.path.join(outdir, "result.json"), "w") as fh:
+        json.dump(result, fh, indent=1, default=float)
+    return result
+
+
+def main(argv: list[str]) -> int:
+    if argv[:1] == ["probe"] and len(argv) == 1:
+        print(json.dumps(probe()))
+        return 0
+    if argv[:1] == ["solve"] and len(argv) == 4:
+        with open(argv[2]) as fh:
+            request = json.load(fh)
+        solve(argv[1], request, argv[3])
+        return 0
+    print(__doc__, file=sys.stderr)
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
