@@ -8,6 +8,10 @@ names the offending field, e.g. ``scenes.paper.N[1]: 201.0 is not an integer``.
 from __future__ import annotations
 
 from collections.abc import Mapping
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from signorini.pipeline.resources import NodeLimits
 
 
 class ConfigError(ValueError):
@@ -36,7 +40,7 @@ def _check_norms(where: str, norms: list) -> None:
         raise ConfigError(f"{where}.norms: names must be unique, got {norms}")
 
 
-def _check_memory(where: str, Ns: list, limit_mb: int) -> None:
+def _check_memory(where: str, Ns: list, limit_mb: int, available: str = "available") -> None:
     from signorini.pipeline.resources import largest_job
 
     for i, N in enumerate(Ns):
@@ -44,8 +48,24 @@ def _check_memory(where: str, Ns: list, limit_mb: int) -> None:
         if need > limit_mb:
             raise ConfigError(
                 f"{where}.N[{i}]: N = {N} needs about {need / 1024:.1f} GB for its {rule} job (estimate from the "
-                f"peaks measured at N = 2001), more than the {limit_mb / 1024:.1f} GB available"
+                f"peaks measured at N = 2001), more than the {limit_mb / 1024:.1f} GB {available}"
             )
+
+
+def _check_runtime(where: str, Ns: list, node: NodeLimits) -> None:
+    """Each scene job's run-time request within the partition's time limit (Slurm would leave a
+    longer job pending for ever)."""
+    from signorini.pipeline.resources import SCENE_RULES, runtime_min
+
+    if node.time_limit_min is None:
+        return
+    for i, N in enumerate(Ns):
+        for rule in SCENE_RULES:
+            if runtime_min(rule, N) > node.time_limit_min:
+                raise ConfigError(
+                    f"{where}.N[{i}]: N = {N} requests {runtime_min(rule, N)} min for its {rule} job, more than "
+                    f"the time limit of {node.time_limit_min} min of Slurm partition {node.partition}"
+                )
 
 
 def _check_solver_options(where: str, solver: str, options: Mapping) -> None:
@@ -70,14 +90,18 @@ def _check_solver_options(where: str, solver: str, options: Mapping) -> None:
             raise ConfigError(f"{where}.solver_options.{key}: {value!r} is not of type {kind.__name__}")
 
 
-def check_config(config: Mapping, mem_limit_mb: int | None = None) -> None:
+def check_config(config: Mapping, mem_limit_mb: int | None = None, node: NodeLimits | None = None) -> None:
     """Semantic checks of a schema-valid config: integer ``N`` (not ``101.0``), unique ``N``,
     norm names of the grammar (``fem.norm_names``), admissible problem parameters and conventions,
-    meshes whose jobs fit into ``mem_limit_mb`` (default: this machine's memory), the active-set
-    solver's options."""
+    meshes whose jobs fit into ``mem_limit_mb`` (default: this machine's memory; with ``node``, the
+    largest node of a Slurm partition: its memory and time limit), the active-set solver's options."""
     from signorini.pipeline.resources import machine_mem_mb
 
     limit = int(mem_limit_mb) if mem_limit_mb else machine_mem_mb()
+    available = "available"
+    if node is not None:
+        limit = min(limit, node.mem_mb) if mem_limit_mb else node.mem_mb
+        available = f"of the largest node of Slurm partition {node.partition}"
     from signorini.fem.norms import Conventions
     from signorini.fem.problem import Problem, ProblemParameterError
 
@@ -87,7 +111,9 @@ def check_config(config: Mapping, mem_limit_mb: int | None = None) -> None:
     for name, scene in scenes.items():
         where = f"scenes.{name}"
         _check_N(where, scene.get("N", []))
-        _check_memory(where, scene.get("N", []), limit)
+        _check_memory(where, scene.get("N", []), limit, available)
+        if node is not None:
+            _check_runtime(where, scene.get("N", []), node)
         if scene.get("solver_options"):
             _check_solver_options(where, scene.get("solver", ""), scene["solver_options"])
         _check_norms(where, scene.get("norms", []))
