@@ -34,10 +34,12 @@ def slurm_node(workflow):
     if getattr(workflow.executor_plugin, "name", None) != "slurm":
         return None
     defaults = workflow.resource_settings.default_resources or {}
-    partition = defaults.get(
-        "slurm_partition"
-    )  # --default-resources slurm_partition=...
-    node = resources.slurm_node_limits(getattr(partition, "value", partition))
+    # --default-resources slurm_partition=...: an expression Snakemake evaluates per job; its text
+    partition = defaults.get("slurm_partition")
+    partition = getattr(partition, "raw", partition)
+    node = resources.slurm_node_limits(
+        str(partition).strip("\"'") if partition else None
+    )
     cores = workflow.resource_settings.cores
     if cores and cores > node.cpus:
         raise ConfigError(

@@ -52,20 +52,21 @@ def _check_memory(where: str, Ns: list, limit_mb: int, available: str = "availab
             )
 
 
-def _check_runtime(where: str, Ns: list, node: NodeLimits) -> None:
-    """Each scene job's run-time request within the partition's time limit (Slurm would leave a
-    longer job pending for ever)."""
-    from signorini.pipeline.resources import SCENE_RULES, runtime_min
+def _check_runtime(where: str, Ns: list, n_norms: int, node: NodeLimits) -> None:
+    """Each mesh's Slurm job (its discretise, solve and norm jobs, one after another) within the
+    partition's time limit: Slurm would leave a longer job pending for ever."""
+    from signorini.pipeline.resources import mesh_group_runtime_min
 
     if node.time_limit_min is None:
         return
     for i, N in enumerate(Ns):
-        for rule in SCENE_RULES:
-            if runtime_min(rule, N) > node.time_limit_min:
-                raise ConfigError(
-                    f"{where}.N[{i}]: N = {N} requests {runtime_min(rule, N)} min for its {rule} job, more than "
-                    f"the time limit of {node.time_limit_min} min of Slurm partition {node.partition}"
-                )
+        need = mesh_group_runtime_min(N, n_norms)
+        if need > node.time_limit_min:
+            raise ConfigError(
+                f"{where}.N[{i}]: N = {N} requests {need} min for its mesh job (discretise, solve and {n_norms} "
+                f"norms one after another), more than the time limit of {node.time_limit_min} min of Slurm "
+                f"partition {node.partition}"
+            )
 
 
 def _check_solver_options(where: str, solver: str, options: Mapping) -> None:
@@ -113,7 +114,7 @@ def check_config(config: Mapping, mem_limit_mb: int | None = None, node: NodeLim
         _check_N(where, scene.get("N", []))
         _check_memory(where, scene.get("N", []), limit, available)
         if node is not None:
-            _check_runtime(where, scene.get("N", []), node)
+            _check_runtime(where, scene.get("N", []), len(scene.get("norms", [])), node)
         if scene.get("solver_options"):
             _check_solver_options(where, scene.get("solver", ""), scene["solver_options"])
         _check_norms(where, scene.get("norms", []))

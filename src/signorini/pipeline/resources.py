@@ -33,6 +33,12 @@ def runtime_min(rule: str, N: int) -> int:
     return base + int(N) ** 2 // per
 
 
+def mesh_group_runtime_min(N: int, n_norms: int) -> int:
+    """The run-time request of a mesh's Slurm job in the slurm profile, whose group runs the mesh's
+    discretise, solve and ``n_norms`` norm jobs one after another: the sum of theirs, in minutes."""
+    return runtime_min("discretise", N) + runtime_min("solve", N) + n_norms * runtime_min("norm", N)
+
+
 def machine_mem_mb() -> int:
     """The physical memory of this machine in MB."""
     return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") // 2**20
