@@ -76,9 +76,9 @@ def cluster(tmp_path_factory):
     """A single-node Slurm without accounting: the environment that points Slurm's commands at it."""
     state = tmp_path_factory.mktemp("slurm")
     try:
-        # the node announces 2 GB less than the machine has: a mesh between the two fits here
+        # the node announces 1 GB less than the machine has: a mesh between the two fits here
         # but not on the node
-        memory = str(machine_mem_mb() - 2048)
+        memory = str(machine_mem_mb() - 1024)
         proc = subprocess.run([START, "--real-memory", memory, state], capture_output=True, text=True, timeout=900)
         assert proc.returncode == 0, proc.stdout + proc.stderr
         env_file = (state / "env").read_text()
@@ -115,10 +115,10 @@ def test_a_request_larger_than_the_node_is_refused_before_submission(cluster, tm
     for key, value in cluster.items():
         monkeypatch.setenv(key, value)
     repo = copy_repo(tmp_path)
-    # a solve that needs 1 GB less than the machine has (the check while parsing passes) and
-    # 1 GB more than the node
+    # a solve that needs 0.5 GB less than the machine has (the check while parsing passes) and
+    # 0.5 GB more than the node
     base, per = MEM_MB["solve"]
-    N = math.isqrt((machine_mem_mb() - 1024 - base) * per)
+    N = math.isqrt((machine_mem_mb() - 512 - base) * per)
     assert largest_job(N)[0] == "solve"
     scene = {**_smoke_config([])["scenes"]["smoke"], "N": [11, N]}
     (repo / "big.yaml").write_text(yaml.safe_dump({"scenes": {"big": scene}}))
