@@ -23,15 +23,48 @@ from signorini.pipeline.cache import (
     warn_corrupt,
 )
 from signorini.pipeline.codedeps import code_inputs
-from signorini.pipeline.config import check_config
+from signorini.pipeline.config import ConfigError, check_config
 from signorini.studies.stability import atlas as stab_atlas
 from signorini.studies.work_precision import study as wp_study
+
+
+def slurm_node(workflow):
+    """The largest node of the Slurm partition the jobs go to when this run submits them through
+    the slurm executor (None otherwise); known once the run starts, not while parsing.
+    """
+    if getattr(workflow.executor_plugin, "name", None) != "slurm":
+        return None
+    defaults = workflow.resource_settings.default_resources or {}
+    # --default-resources slurm_partition=...: an expression Snakemake evaluates per job; its text
+    partition = defaults.get("slurm_partition")
+    partition = getattr(partition, "raw", partition)
+    node = resources.slurm_node_limits(
+        str(partition).strip("\"'") if partition else None
+    )
+    cores = workflow.resource_settings.cores
+    if cores and cores > node.cpus:
+        raise ConfigError(
+            f"--cores {cores}: a group job would request --cpus-per-task={cores}, more than the "
+            f"{node.cpus} CPUs of the largest node of Slurm partition {node.partition}"
+        )
+    return node
+
 
 # integer N, norm names of the grammar, admissible problem parameters
 _mem_limit = getattr(workflow, "global_resources", {}).get(
     "mem_mb"
 )  # --resources / profile
 check_config(config, getattr(_mem_limit, "value", _mem_limit))
+
+
+# Through Slurm, every scene job's memory and run-time request must fit the largest node of the
+# partition and its time limit, and a group job's CPUs (--cores) the node: refused before the
+# first submission, not left pending for ever.
+onstart:
+    if (node := slurm_node(workflow)) is not None:
+        check_config(config, getattr(_mem_limit, "value", _mem_limit), node=node)
+
+
 # atlas blocks: case names, groups, problems, solver columns
 stab_atlas.check_atlases(config)
 for _name, _scene in config["scenes"].items():
@@ -59,7 +92,7 @@ def scene_of(wildcards):
     try:
         return config["scenes"][name]
     except KeyError:
-        raise ValueError(
+        raise ConfigError(
             f"unknown scene {name!r}; configured: {sorted(config['scenes'])}"
         ) from None
 
@@ -152,7 +185,7 @@ def study_of(wildcards):
     """The `study` block of the job's scene."""
     study = scene_of(wildcards).get("study")
     if study is None:
-        raise ValueError(f"scene {wildcards.scene!r} has no study block")
+        raise ConfigError(f"scene {wildcards.scene!r} has no study block")
     return study
 
 

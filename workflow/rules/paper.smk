@@ -1,5 +1,7 @@
 # The paper's study, rendered from the scene `figures_scene` (default: paper): Tables 1-2,
 # Figures 2-3, the reproduction report and the run times in paper_figures/.
+# Every rule here is a local rule: seconds of reading and rendering, which on a cluster run on
+# the submitting node instead of paying a queue round trip each.
 
 
 rule sample:
@@ -10,6 +12,7 @@ rule sample:
         npz=PATHS["fields_npz"],
     log:
         paths.log("scene", "sample"),
+    localrule: True
     conda:
         "../envs/signorini.yaml"
     params:
@@ -27,6 +30,7 @@ rule table1:
         **reported(FIGURES["table1"], "table1", "Paper", "Tables"),
     log:
         paths.log("scene", "table1", scene=FIG),
+    localrule: True
     conda:
         "../envs/signorini.yaml"
     params:
@@ -45,6 +49,7 @@ rule table2:
         **reported(FIGURES["table2"], "table2", "Paper", "Tables"),
     log:
         paths.log("scene", "table2", scene=FIG),
+    localrule: True
     conda:
         "../envs/signorini.yaml"
     params:
@@ -62,6 +67,7 @@ rule figure2:
         **reported(FIGURES["figure2"], "figure2", "Paper", "Figures"),
     log:
         paths.log("scene", "figure2", scene=FIG),
+    localrule: True
     conda:
         "../envs/signorini.yaml"
     script:
@@ -77,6 +83,7 @@ rule figure3:
         **reported(FIGURES["figure3"], "figure3", "Paper", "Figures"),
     log:
         paths.log("scene", "figure3", scene=FIG),
+    localrule: True
     conda:
         "../envs/signorini.yaml"
     params:
@@ -97,6 +104,7 @@ rule reproduction:
         **reported(FIGURES["reproduction"], "reproduction", "Paper", "Reproduction"),
     log:
         paths.log("scene", "reproduction", scene=FIG),
+    localrule: True
     conda:
         "../envs/signorini.yaml"
     script:
@@ -113,6 +121,7 @@ rule runtime:
         **reported(FIGURES["runtime"], "runtime", "Paper", "Run times"),
     log:
         paths.log("scene", "runtime", scene=FIG),
+    localrule: True
     conda:
         "../envs/signorini.yaml"
     params:

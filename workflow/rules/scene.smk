@@ -1,5 +1,6 @@
 # The chain every scene runs, per scene and N: discretise -> solve -> norm (one job per norm,
-# so a target computes only the norms it needs) -> errors.csv -> eoc.csv.
+# so a target computes only the norms it needs) -> errors.csv -> eoc.csv. The tables errors and
+# eoc are local rules (seconds): on a cluster they run on the submitting node.
 
 
 rule discretise:
@@ -93,6 +94,7 @@ rule errors:
         ),
     log:
         paths.log("scene", "errors"),
+    localrule: True
     conda:
         "../envs/signorini.yaml"
     params:
@@ -117,6 +119,7 @@ rule eoc:
         ),
     log:
         paths.log("scene", "eoc"),
+    localrule: True
     conda:
         "../envs/signorini.yaml"
     script:

@@ -10,6 +10,10 @@ from __future__ import annotations
 import sys
 from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from signorini.pipeline.resources import NodeLimits
 
 SCHEMA = "workflow/schemas/config.schema.yaml"
 DEFAULT_CONFIG = "workflow/config.yaml"
@@ -59,7 +63,7 @@ def _check_norms(where: str, norms: list) -> None:
         raise ConfigError(f"{where}.norms: names must be unique, got {norms}")
 
 
-def _check_memory(where: str, Ns: list, limit_mb: int) -> None:
+def _check_memory(where: str, Ns: list, limit_mb: int, available: str = "available") -> None:
     from signorini.pipeline.resources import largest_job
 
     for i, N in enumerate(Ns):
@@ -67,19 +71,41 @@ def _check_memory(where: str, Ns: list, limit_mb: int) -> None:
         if need > limit_mb:
             raise ConfigError(
                 f"{where}.N[{i}]: N = {N} needs about {need / 1024:.1f} GB for its {rule} job (estimate from the "
-                f"peaks measured at N = 2001), more than the {limit_mb / 1024:.1f} GB available"
+                f"peaks measured at N = 2001), more than the {limit_mb / 1024:.1f} GB {available}"
             )
 
 
-def check_config(config: Mapping, mem_limit_mb: int | None = None) -> None:
+def _check_runtime(where: str, Ns: list, n_norms: int, node: NodeLimits) -> None:
+    """Each mesh's Slurm job (its discretise, solve and norm jobs, one after another) within the
+    partition's time limit: Slurm would leave a longer job pending for ever."""
+    from signorini.pipeline.resources import mesh_group_runtime_min
+
+    if node.time_limit_min is None:
+        return
+    for i, N in enumerate(Ns):
+        need = mesh_group_runtime_min(N, n_norms)
+        if need > node.time_limit_min:
+            raise ConfigError(
+                f"{where}.N[{i}]: N = {N} requests {need} min for its mesh job (discretise, solve and {n_norms} "
+                f"norms one after another), more than the time limit of {node.time_limit_min} min of Slurm "
+                f"partition {node.partition}"
+            )
+
+
+def check_config(config: Mapping, mem_limit_mb: int | None = None, node: NodeLimits | None = None) -> None:
     """Semantic checks of a schema-valid config: integer ``N`` (not ``101.0``), unique ``N``,
     norm names of the grammar (``fem.norm_names``), admissible problem parameters and conventions,
-    meshes whose jobs fit into ``mem_limit_mb`` (default: this machine's memory), the solver's
-    options (names and types, ``signorini.pipeline.solver_options``)."""
+    meshes whose jobs fit into ``mem_limit_mb`` (default: this machine's memory; with ``node``, the
+    largest node of a Slurm partition: its memory and time limit), the solver's options (names and
+    types, ``signorini.pipeline.solver_options``)."""
     from signorini.pipeline.resources import machine_mem_mb
     from signorini.pipeline.solver_options import check_options
 
     limit = int(mem_limit_mb) if mem_limit_mb else machine_mem_mb()
+    available = "available"
+    if node is not None:
+        limit = min(limit, node.mem_mb) if mem_limit_mb else node.mem_mb
+        available = f"of the largest node of Slurm partition {node.partition}"
     from signorini.fem.norms import Conventions
     from signorini.fem.problem import Problem, ProblemParameterError
 
@@ -89,7 +115,9 @@ def check_config(config: Mapping, mem_limit_mb: int | None = None) -> None:
     for name, scene in scenes.items():
         where = f"scenes.{name}"
         _check_N(where, scene.get("N", []))
-        _check_memory(where, scene.get("N", []), limit)
+        _check_memory(where, scene.get("N", []), limit, available)
+        if node is not None:
+            _check_runtime(where, scene.get("N", []), len(scene.get("norms", [])), node)
         problem = check_options(f"{where}.solver_options", scene.get("solver", ""), scene.get("solver_options") or {})
         if problem:
             raise ConfigError(problem)

@@ -6,6 +6,8 @@ constants follow the peaks measured at N = 2001 (README: discretise 3.7 GB, solv
 from __future__ import annotations
 
 import os
+import subprocess
+from dataclasses import dataclass
 
 # rule: (base, N² per unit) of the memory request in MB and of the run-time request in minutes
 MEM_MB = {
@@ -31,6 +33,12 @@ def runtime_min(rule: str, N: int) -> int:
     return base + int(N) ** 2 // per
 
 
+def mesh_group_runtime_min(N: int, n_norms: int) -> int:
+    """The run-time request of a mesh's Slurm job in the slurm profile, whose group runs the mesh's
+    discretise, solve and ``n_norms`` norm jobs one after another: the sum of theirs, in minutes."""
+    return runtime_min("discretise", N) + runtime_min("solve", N) + n_norms * runtime_min("norm", N)
+
+
 def machine_mem_mb() -> int:
     """The physical memory of this machine in MB."""
     return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") // 2**20
@@ -39,3 +47,61 @@ def machine_mem_mb() -> int:
 def largest_job(N: int) -> tuple[str, int]:
     """The scene job with the largest memory request on mesh ``N``: (rule, MB)."""
     return max(((rule, mem_mb(rule, N)) for rule in SCENE_RULES), key=lambda item: item[1])
+
+
+@dataclass(frozen=True)
+class NodeLimits:
+    """What one job can get on the largest node of a Slurm partition: CPUs, memory in MB and the
+    partition's time limit in minutes (None: unlimited)."""
+
+    partition: str
+    cpus: int
+    mem_mb: int
+    time_limit_min: int | None
+
+
+def slurm_time_minutes(text: str) -> int | None:
+    """A Slurm time limit (``infinite``, ``MM``, ``MM:SS``, ``HH:MM:SS``, ``D-HH[:MM[:SS]]``) in
+    whole minutes, rounded down; None when unlimited."""
+    text = text.strip()
+    if text.lower() in ("infinite", "unlimited", "n/a"):
+        return None
+    days, _, clock = text.rpartition("-")
+    parts = [int(p) for p in clock.split(":")]
+    if days:  # D-HH, D-HH:MM, D-HH:MM:SS
+        hours, minutes = parts[0], (parts[1] if len(parts) > 1 else 0)
+    elif len(parts) == 3:
+        hours, minutes = parts[0], parts[1]
+    else:  # MM or MM:SS
+        hours, minutes = 0, parts[0]
+    return (int(days or 0) * 24 + hours) * 60 + minutes
+
+
+def parse_sinfo(text: str, partition: str | None = None) -> NodeLimits:
+    """The largest node of ``partition`` (default: the cluster's default partition, marked ``*``)
+    from the lines ``partition|CPUs|memory MB|time limit`` of ``sinfo -N -h -o '%P|%c|%m|%l'``."""
+    rows = [line.split("|") for line in text.splitlines() if line.strip()]
+    if partition is None:
+        default = [row for row in rows if row[0].endswith("*")]
+        rows = default or rows
+    else:
+        rows = [row for row in rows if row[0].rstrip("*") == partition]
+    if not rows:
+        raise ValueError(f"sinfo lists no node of partition {partition or '(default)'}")
+    limits = [slurm_time_minutes(row[3]) for row in rows]
+    return NodeLimits(
+        partition=rows[0][0].rstrip("*"),
+        cpus=max(int(row[1].rstrip("+")) for row in rows),
+        mem_mb=max(int(row[2].rstrip("+")) for row in rows),
+        time_limit_min=None if None in limits else max(limits),
+    )
+
+
+def slurm_node_limits(partition: str | None = None) -> NodeLimits:
+    """The largest node of a Slurm partition as ``sinfo`` reports it (the cluster's default
+    partition unless one is named)."""
+    cmd = ["sinfo", "--Node", "--noheader", "--format=%P|%c|%m|%l"]
+    if partition:
+        cmd.append(f"--partition={partition}")
+    out = subprocess.run(cmd, capture_output=True, text=True, check=True, timeout=60).stdout
+    return parse_sinfo(out, partition)
