@@ -152,6 +152,9 @@ def built_repo(tmp_path_factory):
     path = repo / "workflow/config.yaml"
     config = yaml.safe_load(path.read_text())
     config["scenes"] = {name: config["scenes"][name] for name in SHIPPED_SCENES} | TEST_SCENES
+    # the second case's EOC test reads its three finest EOCs: its four finest meshes give them
+    # unchanged (each mesh is solved on its own), at two thirds of the jobs
+    config["scenes"]["case2"]["N"] = config["scenes"]["case2"]["N"][-4:]
     config["figures_scene"] = "smoke"
     path.write_text(yaml.safe_dump(config, sort_keys=False))
     t0 = time.perf_counter()

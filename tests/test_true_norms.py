@@ -273,3 +273,47 @@ def test_true_maxima_find_an_interior_maximum_the_point_sets_miss():
     corner = 2.0 * float(np.max(np.hypot(*(np.array([[0, 1, 0, 1], [0, 0, 1, 1]]) - Bump.c[:, None]))))
     gradient = Conventions(w1p_form="seminorm")
     assert true_norm(Bump(), mesh, zero, "W1inf_true", gradient).value == pytest.approx(corner, rel=1e-10)
+
+
+# --- the pipeline: norm artifacts and the true tables ---------------------------------------------
+
+
+def test_true_tables_stage_renders_convention_true_and_printed_values(tmp_path):
+    """Synthetic norm artifacts (N = 101, 201): every cell, gap and EOC of the tables follows from them."""
+    import pandas as pd
+
+    from signorini.pipeline.artifacts import save_json
+    from signorini.studies.paper.true_tables import true_tables_stage
+
+    paper = tmp_path / "paper_table1.csv"
+    paper.write_text("# published\nh,L4\n1/101,1.0e-3\n1/201,2.6e-4\n")
+    Ns, conv, true = [101, 201], {"L4": [1.0e-3, 2.5e-4]}, {"L4_true": [1.01e-3, 2.5e-4]}
+    jsons: dict[str, list[str]] = {}
+    for name, values in (*conv.items(), *true.items()):
+        for N, value in zip(Ns, values, strict=True):
+            path = tmp_path / f"{name}_{N}.json"
+            accuracy = {"error_estimate": 1e-9, "rtol": 1e-4, "converged": True}
+            extra = {"quadrature_error": accuracy} if name.endswith("_true") else {}
+            save_json(path, {"N": N, "norm": name, "value": value, **extra})
+            jsons.setdefault(name, []).append(str(path))
+    outs = {k: tmp_path / f"{k}.{k.split('_')[1]}" for k in ("table1_csv", "table1_md", "table2_csv", "table2_md")}
+    true_tables_stage(Ns, jsons, paper, outs)
+    t1 = pd.read_csv(outs["table1_csv"])
+    assert list(t1["convention"]) == conv["L4"] and list(t1["true"]) == true["L4_true"]
+    assert t1["convention_vs_true"].iloc[0] == pytest.approx(1.0e-3 / 1.01e-3 - 1.0)
+    assert t1["paper_vs_true"].iloc[1] == pytest.approx(2.6e-4 / 2.5e-4 - 1.0)
+    t2 = pd.read_csv(outs["table2_csv"])
+    assert list(t2["h"]) == ["1/201", "regr.", "theo."]
+    assert float(t2["L4_true"].iloc[0]) == pytest.approx(math.log(1.01e-3 / 2.5e-4) / math.log(201 / 101))
+    assert "| L⁴(Ω) | -0.99 % … +0.00 % | -0.99 % … +4.00 % | 4.0e-06 |" in outs["table1_md"].read_text()
+
+
+def test_true_norm_artifacts_of_the_second_case_carry_their_accuracy(built_repo):
+    from signorini.pipeline.artifacts import load_json
+
+    for name in ("L4_true", "Linf_true", "W14_true", "W1inf_true", "H12_true"):
+        art = load_json(built_repo / f"results/case2/N241/norms/{name}.json")
+        acc = art["quadrature_error"]
+        assert acc["converged"] and acc["rtol"] == RTOL and len(acc["levels"]) >= 2
+        assert acc["error_estimate"] <= RTOL * art["value"]
+        assert acc["levels"][-1]["value"] == art["value"]
