@@ -131,7 +131,8 @@ TEST_SCENES = {
 }
 # shipped scenes the built copy keeps as they are: the second manufactured case is tested as shipped
 SHIPPED_SCENES = ("paper", "smoke", "case2")
-# every target of the built copy: the paper's outputs from the smoke scene, the three studies, the second case
+# every target of the built copy: the paper's outputs and true norms from the smoke scene, the three
+# studies, the second case
 BUILT_TARGETS = (
     "all",
     "theory",
@@ -140,6 +141,7 @@ BUILT_TARGETS = (
     "results/mine/errors.csv",
     "results/mine/eoc.csv",
     "results/case2/eoc.csv",
+    "true_norms",
 )
 
 

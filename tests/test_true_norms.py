@@ -317,3 +317,18 @@ def test_true_norm_artifacts_of_the_second_case_carry_their_accuracy(built_repo)
         assert acc["converged"] and acc["rtol"] == RTOL and len(acc["levels"]) >= 2
         assert acc["error_estimate"] <= RTOL * art["value"]
         assert acc["levels"][-1]["value"] == art["value"]
+
+
+def test_true_norms_target_renders_every_norm_of_table_2(built_repo):
+    """The test workflow renders the smoke scene (N = 11, 21, 41): a row per mesh and norm, converged."""
+    import pandas as pd
+
+    from signorini.paper import TABLE2_NORMS
+
+    t1 = pd.read_csv(built_repo / "paper_figures/table1_true.csv")
+    assert list(t1["norm"]) == list(TABLE2_NORMS) * 3 and list(t1["h"].unique()) == ["1/11", "1/21", "1/41"]
+    assert (t1["quadrature_error"] <= RTOL * t1["true"]).all()
+    assert t1["paper"].isna().all()  # the paper has no row for these meshes
+    t2 = pd.read_csv(built_repo / "paper_figures/table2_true.csv")
+    assert list(t2.columns) == ["h", *(true_name(n) for n in TABLE2_NORMS)]
+    assert "## Gap per norm" in (built_repo / "paper_figures/table1_true.md").read_text()
