@@ -38,6 +38,7 @@ include: "workflow/rules/paper.smk"
 include: "workflow/rules/theory.smk"
 include: "workflow/rules/work_precision.smk"
 include: "workflow/rules/stability.smk"
+include: "workflow/rules/true_norms.smk"
 
 
 rule all:

@@ -11,7 +11,13 @@ from helpers import snakemake
 
 from signorini.pipeline.paths import FIGURES, PATHS, TARGETS, built_targets
 
-CATEGORIES = {"all": "Paper", "theory": "Theory", "work_precision": "Work precision", "stability": "Stability"}
+CATEGORIES = {
+    "all": "Paper",
+    "theory": "Theory",
+    "work_precision": "Work precision",
+    "stability": "Stability",
+    "true_norms": "Paper",
+}
 
 
 def embedded(html: str, name: str) -> dict:

@@ -80,9 +80,10 @@ _PART_TEX = {"": "", "plus": r"\ (+)", "minus": r"\ (-)"}
 
 
 def label_md(norm: str) -> str:
-    """Markdown/Unicode label of a norm's space: ``L⁴(Ω)``, ``W^{1,∞}(Ω)``, ``H^{1/2}(∂Ω)``."""
+    """Markdown/Unicode label of a norm's space: ``L⁴(Ω)``, ``W^{1,∞}(Ω)``, ``H^{1/2}(∂Ω)``;
+    ``W^{1,∞}(Ω) (true)`` for the converged evaluation."""
     spec = parse_norm_name(norm)
-    return _space_md(spec) + _domain(spec, tex=False) + _PART_MD[spec.part]
+    return _space_md(spec) + _domain(spec, tex=False) + _PART_MD[spec.part] + (" (true)" if spec.true else "")
 
 
 def label_tex(norm: str, domain: bool = True) -> str:
@@ -90,7 +91,8 @@ def label_tex(norm: str, domain: bool = True) -> str:
     but keeps ``(\\partial\\Omega)`` of the boundary norms (``$L^4$``, ``$H^{1/2}(\\partial\\Omega)$``)."""
     spec = parse_norm_name(norm)
     where = _domain(spec, tex=True) if domain or spec.on_boundary else ""
-    return f"${_space_tex(spec)}{where}{_PART_TEX[spec.part]}$"
+    true = r"\ (\mathrm{true})" if spec.true else ""
+    return f"${_space_tex(spec)}{where}{_PART_TEX[spec.part]}{true}$"
 
 
 def error_label_tex(norm: str) -> str:

@@ -11,9 +11,14 @@ Gauss points of the boundary edges.  A norm is requested by name:
 ``W1p``    ``W^{1,p}`` norm in the form ``Conventions.w1p_form`` (``W14``, ``W116``)
 ``W1inf``  ``W^{1,∞}`` norm, same form, maximum over ``Conventions.w1inf_points``
 ``H1``     ``(‖e‖²_{L²} + ‖∇e‖²_{L²})^{1/2}``
-``H12``    ``H^{1/2}(∂Ω)`` estimate by interpolation, ``Conventions.h12_form``
+``H12``    ``H^{1/2}(∂Ω)`` estimate by interpolation, ``Conventions.h12_form``; the boundary
+           integrals split at the free point and at ``x0 ± R`` (``fem.boundary``)
 ``L4plus`` / ``L4minus``  ``‖(u - u_h)^±‖_{L⁴}``; any ``Lp`` works with the suffixes
 =========  =====================================================================
+
+These are the paper's conventions (fixed rules and point sets).  The same norms evaluated to a
+stated accuracy, with an error estimate, are the ``<name>_true`` norms of ``fem.true_norms``
+(``evaluate_norms`` accepts both).
 """
 
 from __future__ import annotations
@@ -23,9 +28,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from signorini.fem.boundary import boundary_rule
 from signorini.fem.norm_names import UnknownNormError, parse_norm_name
 from signorini.fem.problem import Problem
-from signorini.fem.quadrature import TRIANGLE_RULES, dunavant8, gauss_legendre_01, stroud_conical
+from signorini.fem.quadrature import TRIANGLE_RULES, dunavant8, stroud_conical
 
 if TYPE_CHECKING:  # scikit-fem costs 0.5 s to import; only type hints need it here
     from skfem import MeshTri
@@ -34,7 +40,7 @@ QUADRATURES = TRIANGLE_RULES
 W1P_FORMS = ("components", "gradient", "seminorm")
 MAX_POINTS = ("vertices", "midpoints", "quadrature", "all")
 H12_FORMS = ("geometric_full", "geometric_semi")
-BOUNDARY_POINTS = 8  # Gauss–Legendre points per boundary edge
+BOUNDARY_POINTS = 8  # Gauss–Legendre points per piece of a boundary edge (fem.boundary)
 
 __all__ = ["Conventions", "ErrorField", "UnknownNormError", "error_field", "evaluate_norms", "parse_norm"]
 
@@ -143,10 +149,20 @@ def _element_points(mesh: MeshTri, which: str) -> np.ndarray:
     return {"vertices": verts, "midpoints": mids}.get(which, np.hstack([verts, mids]))
 
 
-def _boundary_edges(mesh: MeshTri) -> tuple[np.ndarray, np.ndarray]:
-    """Boundary edges as (start vertex, end vertex) index arrays."""
-    facets = mesh.facets[:, mesh.boundary_facets()]
-    return facets[0], facets[1]
+def boundary_error(
+    problem: Problem, mesh: MeshTri, u_h: np.ndarray, n: int, split: bool = True
+) -> tuple[np.ndarray, ...]:
+    """``e``, ``∂_t e`` and the arclength weights at the points of ``fem.boundary.boundary_rule``
+    (``n`` Gauss points per piece of a boundary edge); ``u_h`` is linear along each edge."""
+    rule = boundary_rule(mesh, problem, n, split)
+    a, b = rule.a[rule.edge], rule.b[rule.edge]
+    pa, pb = mesh.p[:, a], mesh.p[:, b]
+    length = np.linalg.norm(pb - pa, axis=0)
+    xb = rule.points(mesh.p)
+    uhb = u_h[a][:, None] * (1.0 - rule.s) + u_h[b][:, None] * rule.s
+    eb = problem.u(xb) - uhb
+    dteb = np.einsum("ie,iek->ek", (pb - pa) / length, problem.grad_u(xb)) - ((u_h[b] - u_h[a]) / length)[:, None]
+    return eb, dteb, rule.ds
 
 
 def _parts_needed(names: list[str] | None) -> set[str]:
@@ -215,18 +231,8 @@ def error_field(
     if "w1inf" in parts:
         e_w1, de_max = at_points(conv.w1inf_points)
     if "boundary" in parts:
-        # Gauss–Legendre on every boundary edge; u_h is linear along each edge
-        a, b = _boundary_edges(mesh)
-        s, ws = gauss_legendre_01(BOUNDARY_POINTS)
-        pa, pb = mesh.p[:, a], mesh.p[:, b]
-        length = np.linalg.norm(pb - pa, axis=0)
-        tangent = (pb - pa) / length
-        xb = pa[:, :, None] + (pb - pa)[:, :, None] * s[None, None, :]
-        uhb = u_h[a][:, None] * (1.0 - s) + u_h[b][:, None] * s
-        duh_t = ((u_h[b] - u_h[a]) / length)[:, None]
-        eb = problem.u(xb) - uhb
-        dteb = np.einsum("ie,iek->ek", tangent, problem.grad_u(xb)) - duh_t
-        dsb = length[:, None] * ws[None, :]
+        # Gauss–Legendre on every piece of every boundary edge, split (and graded) where u is not smooth
+        eb, dteb, dsb = boundary_error(problem, mesh, u_h, BOUNDARY_POINTS)
     return ErrorField(e, de, dx, e_max, de_max, e_w1, eb, dteb, dsb, conv)
 
 
@@ -308,8 +314,11 @@ def h12_interpolation_norm(f: ErrorField) -> float:
 
 
 def parse_norm(name: str):
-    """Map a norm name (``fem.norm_names``) to a function of an ``ErrorField``; raises ``UnknownNormError``."""
+    """Map a norm name (``fem.norm_names``) to a function of an ``ErrorField``; raises ``UnknownNormError``
+    (also for a ``_true`` name: those are evaluated by ``evaluate_norms`` / ``fem.true_norms``)."""
     spec = parse_norm_name(name)
+    if spec.true:
+        raise UnknownNormError(f"{name!r} is not a function of an error field: evaluate it with evaluate_norms")
     if spec.family == "H12":
         return h12_interpolation_norm
     if spec.family == "H1":
@@ -347,7 +356,16 @@ def evaluate_norms(
     conventions: Conventions | None = None,
     chunk: int = CHUNK_ELEMENTS,
 ) -> dict[str, float]:
-    """The named norms of ``u - u_h``, evaluated over chunks of triangles (bounded memory)."""
+    """The named norms of ``u - u_h``, evaluated over chunks of triangles (bounded memory); a
+    ``_true`` name by ``fem.true_norms.true_norm`` (its value; the error estimate is dropped)."""
+    true = [name for name in names if parse_norm_name(name).true]
+    if true:
+        from signorini.fem.true_norms import true_norm
+
+        rest = [name for name in names if name not in true]
+        out = evaluate_norms(problem, mesh, u_h, rest, conventions, chunk) if rest else {}
+        out |= {name: true_norm(problem, mesh, u_h, name, conventions).value for name in true}
+        return {name: out[name] for name in names}
     reductions = {name: _reduction(name) for name in names}
     cell = [n for n, (kind, _) in reductions.items() if kind != "boundary"]
     boundary = [n for n, (kind, _) in reductions.items() if kind == "boundary"]

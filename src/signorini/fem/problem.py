@@ -57,6 +57,14 @@ class Problem:
         """The problem of a scene's ``problem`` block (numbers as floats)."""
         return cls(**{k: float(v) for k, v in params.items()})
 
+    def singular_points(self) -> np.ndarray:
+        """(2, 1): the free point (x0, 0), where u ~ r^{3/2} is not smooth (quadrature is graded there)."""
+        return np.array([[self.x0], [0.0]])
+
+    def boundary_breaks(self) -> np.ndarray:
+        """(2, 2): (x0 ± R, 0), where the cut-off joins 0 (C⁴ only): boundary rules split there."""
+        return np.array([[self.x0 - self.R, self.x0 + self.R], [0.0, 0.0]])
+
     # --- the cut-off ψ(r) = 1 - S(r/R), S(s) = s⁵(126 - 420 s + 540 s² - 315 s³ + 70 s⁴) ---
     def psi(self, r: np.ndarray) -> np.ndarray:
         """ψ(r); the C⁴ degree-9 polynomial cut-off, zero for r ≥ R."""

@@ -26,6 +26,7 @@ PATHS = {
     "errors_csv": "results/{scene}/errors.csv",
     "eoc_csv": "results/{scene}/eoc.csv",
     "fields_npz": "results/{scene}/fields.npz",
+    "h12_boundary_csv": "results/{scene}/h12_boundary.csv",
     # the studies beyond the paper
     "theory_json": f"{_MESH}/theory.json",
     "atlas_case_json": "results/{scene}/atlas/{case}.json",
@@ -79,6 +80,10 @@ FIGURES = {
     },
     "work_precision_report": _outputs("work_precision", "md"),
     "stability_atlas": _outputs("stability", "csv", "md", "pdf", "png"),
+    "true_tables": {
+        **{f"table1_{k}": v for k, v in _outputs("table1_true", "csv", "md").items()},
+        **{f"table2_{k}": v for k, v in _outputs("table2_true", "csv", "md").items()},
+    },
 }
 
 
@@ -106,6 +111,7 @@ TARGETS = {
     "theory": ("theory_report",),
     "work_precision": ("work_precision_table", "work_precision_figures", "work_precision_report"),
     "stability": ("stability_atlas",),
+    "true_norms": ("true_tables",),
 }
 
 

@@ -32,7 +32,7 @@ Largest |relative deviation| per norm (EOC and regr. rows): {worst2}.
 The "theo." row holds the expected orders (minus ε), the same constants on both sides.
 
 {table2}
-## Remarks on deviations
+{h12_boundary}## Remarks on deviations
 
 {remarks}
 """
@@ -59,6 +59,46 @@ def _summary(worst: Mapping[str, float]) -> str:
     return ", ".join(f"{label_md(k)} {100.0 * v:.2f} %" for k, v in worst.items())
 
 
+H12_SECTION = """\
+## The H^{{1/2}}(∂Ω) column and the boundary rule
+
+The boundary integrals of `H^{{1/2}}(∂Ω)` are split at the free point `(x0, 0)` (and at `x0 ± R`),
+where `∂_t u` has an `r^{{1/2}}` kink; on whole edges the 8 Gauss points integrate across the kink.
+Source: `{source}` (both rules on the same certified solutions).
+Deviation from the paper with the whole-edge rule: {whole}; with the split rule (Table 1): {split}.
+The split moves `H^{{1/2}}` by {moved} (relative).
+
+{table}
+"""
+
+
+def h12_section(h12_csv: str | os.PathLike, paper: Mapping) -> str:
+    """The ``H^{1/2}`` column with the whole-edge and the split boundary rule against the paper."""
+    lines = Path(h12_csv).read_text().splitlines()
+    rows, dev_whole, dev_split, moved = [], [], [], []
+    for line in lines[1:]:
+        N, _, whole, split = line.split(",")
+        label = f"1/{int(N)}"
+        pval = paper.get(label, {}).get("H12")
+        whole, split = float(whole), float(split)
+        moved.append(split / whole - 1.0)
+        cells = [label, f"{whole:.4e}", f"{split:.4e}", f"{100.0 * moved[-1]:+.2f} %"]
+        if pval is None:
+            rows.append([*cells, "—", "—", "—"])
+            continue
+        dev_whole.append(relative_deviation(whole, pval))
+        dev_split.append(relative_deviation(split, pval))
+        rows.append([*cells, f"{pval:.4e}", f"{100.0 * dev_whole[-1]:+.2f} %", f"{100.0 * dev_split[-1]:+.2f} %"])
+    header = ["h", "whole edges", "split", "split vs whole", "paper", "whole vs paper", "split vs paper"]
+
+    def span(values: list[float]) -> str:
+        return f"{100.0 * min(values):+.2f} % … {100.0 * max(values):+.2f} %" if values else "—"
+
+    return H12_SECTION.format(
+        source=h12_csv, whole=span(dev_whole), split=span(dev_split), moved=span(moved), table=md_table(header, rows)
+    )
+
+
 def reproduction_stage(
     ours_table1: str | os.PathLike,
     ours_table2: str | os.PathLike,
@@ -66,8 +106,11 @@ def reproduction_stage(
     paper_table2: str | os.PathLike,
     remarks: str | os.PathLike,
     out_md: str | os.PathLike,
+    h12_boundary: str | os.PathLike | None = None,
 ) -> None:
-    """``reproduction.md``: every cell of the published Tables 1 and 2 as ours | paper | relative deviation."""
+    """``reproduction.md``: every cell of the published Tables 1 and 2 as ours | paper | relative deviation;
+    with ``h12_boundary`` (``results/<scene>/h12_boundary.csv``) also the ``H^{1/2}`` column under
+    the whole-edge and the split boundary rule."""
     rows1, worst1 = cells(read_table_csv(ours_table1), read_table_csv(paper_table1), lambda v: f"{v:.4e}")
     rows2, worst2 = cells(read_table_csv(ours_table2), read_table_csv(paper_table2), lambda v: f"{v:.4f}")
     text = TEMPLATE.format(
@@ -77,6 +120,7 @@ def reproduction_stage(
         worst2=_summary(worst2),
         table1=md_table(HEADER, rows1),
         table2=md_table(HEADER, rows2),
+        h12_boundary=h12_section(h12_boundary, read_table_csv(paper_table1)) if h12_boundary else "",
         remarks=Path(remarks).read_text().strip(),
     )
     atomic_write_text(out_md, text)

@@ -96,6 +96,16 @@ def read_norm(path: str | os.PathLike, norm: str, N: int) -> float:
     return value
 
 
+def read_quadrature_error(path: str | os.PathLike, norm: str, N: int) -> dict:
+    """The recorded accuracy of a ``_true`` norm artifact (``error_estimate``, ``rtol``, ``converged``,
+    ``levels``), checked to hold ``norm`` at ``N``."""
+    read_norm(path, norm, N)
+    accuracy = load_json(path).get("quadrature_error")
+    if not isinstance(accuracy, dict) or not np.isfinite(float(accuracy.get("error_estimate", np.nan))):
+        raise CorruptArtifactError(f"{path}: {norm} at N={N} has no finite quadrature error estimate")
+    return accuracy
+
+
 def read_errors(scene_N: Sequence[int], norm_jsons: Mapping[str, Sequence[str | os.PathLike]]) -> pd.DataFrame:
     """A DataFrame with columns ``N``, ``h`` and one column per norm (in the order of ``norm_jsons``),
     read from the per-norm JSON artifacts; ``norm_jsons[name][k]`` belongs to ``scene_N[k]``."""

@@ -1,0 +1,29 @@
+# The norms of Tables 1-2 evaluated to a stated accuracy (<norm>_true, signorini.fem.true_norms)
+# on the rendered scene's meshes, beside the paper's conventions and printed values. Not part of
+# `all`: the true norm jobs take seconds to half a minute each (snakemake -c2 true_norms).
+
+
+rule true_tables:
+    """table1_true and table2_true: convention, true and published errors, EOCs of the true norms."""
+    input:
+        norms=flat(true_table_norms()),
+        paper_table1=paths.REFERENCES["paper_table1"],
+        code=code("true_tables"),
+    output:
+        **reported(FIGURES["true_tables"], "true_tables", "Paper", "True norms"),
+    log:
+        paths.log("scene", "true_tables", scene=FIG),
+    conda:
+        "../envs/signorini.yaml"
+    params:
+        N=scene_of(FIG)["N"],
+        norm_jsons=true_table_norms(),
+    script:
+        "../scripts/true_tables.py"
+
+
+rule true_norms:
+    """The true norms beside the paper's conventions: paper_figures/table{1,2}_true.{csv,md}."""
+    input:
+        rules.true_tables.output,
+    localrule: True
