@@ -25,7 +25,7 @@ from signorini.pipeline.codedeps import _imports, import_closure
 
 SRC = ROOT / "src"
 PACKAGE = SRC / "signorini"
-AGGREGATES = {"all", "theory", "work_precision", "stability"}  # target rules without a script
+AGGREGATES = {"all", "theory", "work_precision", "stability", "true_norms"}  # target rules without a script
 
 
 # --- layers ------------------------------------------------------------------------------------
