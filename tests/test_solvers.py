@@ -522,3 +522,16 @@ def test_the_option_tables_match_the_installed_qp_solvers():
     with pytest.raises(TypeError):
         scs.SCS(data, {"l": 1}, not_a_setting=1)
     assert "polishing" in route_options("cvxpy_osqp")[1] and "tol" in route_options("OSQP")[1]
+
+
+def test_a_cascade_start_that_does_not_settle_falls_back_to_the_cold_start(caplog):
+    """From the coarse interpolant of this problem the contact set grows by one node per Newton
+    step and exceeds max_iter; the solve is repeated from the cold start, which settles."""
+    import logging
+
+    disc = build(Problem(x0=0.4142, R=0.3, A=10.0, c=1.0), 121, "sw_ne")
+    with caplog.at_level(logging.WARNING, logger="signorini.fem.solve"):
+        result = solve_discrete(disc)
+    assert "cascade start did not settle" in caplog.text
+    cold = solve_discrete(disc, warm_start=None)
+    assert np.array_equal(result.u, cold.u) and result.certificate.ok

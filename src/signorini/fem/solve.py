@@ -3,10 +3,14 @@ of ``signorini.solvers``."""
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 
 from signorini.fem.discrete import DiscreteProblem, build, interpolate_fk
-from signorini.solvers import SolveResult, solve
+from signorini.solvers import NotConvergedError, SolveResult, solve
+
+log = logging.getLogger(__name__)
 
 CASCADE_FACTOR = 4  # coarse level N // 4 provides the warm start of level N
 CASCADE_MIN_N = 24  # below this, solve cold
@@ -16,7 +20,9 @@ def solve_discrete(
     disc: DiscreteProblem, solver: str = "active_set", warm_start: str | np.ndarray | None = "cascade", **options
 ) -> SolveResult:
     """Solve (S_h).  For ``active_set``, ``warm_start="cascade"`` first solves on the
-    coarser mesh ``N // CASCADE_FACTOR`` (recursively) and starts from its interpolant."""
+    coarser mesh ``N // CASCADE_FACTOR`` (recursively) and starts from its interpolant; when the
+    active set does not settle from that start (the contact set grows by one node per step from
+    a start far from it), the solve is repeated from the cold start."""
     if solver == "active_set":
         if isinstance(warm_start, str):
             if warm_start != "cascade":
@@ -28,5 +34,12 @@ def solve_discrete(
                 uc = solve_discrete(coarse, solver, "cascade", **options).u
                 warm_start = interpolate_fk(Nc, disc.diagonal, uc, disc.mesh.p)
                 options.setdefault("warm_start_dilation", 0)
+            if warm_start is not None:
+                try:
+                    return solve(solver, disc.A, disc.b, disc.boundary, **options, warm_start=warm_start)
+                except NotConvergedError as err:
+                    log.warning("N=%d: cascade start did not settle (%s); solving from the cold start", disc.N, err)
+                    options.pop("warm_start_dilation", None)
+                    warm_start = None
         options["warm_start"] = warm_start
     return solve(solver, disc.A, disc.b, disc.boundary, **options)
