@@ -208,21 +208,22 @@ def _fit_exponent(n_dofs: Sequence[float], times: Sequence[float]) -> float:
     return float(np.polyfit(np.log(np.asarray(n_dofs, dtype=float)), np.log(np.asarray(times, dtype=float)), 1)[0])
 
 
-def _peers(df: pd.DataFrame, Ns: Sequence[int], cheapest: Mapping[int, Mapping[str, dict]]) -> dict[str, Any]:
+def _peers(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> dict[str, Any]:
     """Our cascade against the PETSc peers: per N the fastest peer run that keeps Table 1's
-    digits (status ``ok``) and its time over ours; per peer the time to those digits against the
-    number of unknowns (fit ``time ∝ unknowns^p``)."""
+    digits with status ``ok`` and its time over ours; per peer the time to those digits against
+    the number of unknowns (fit ``time ∝ unknowns^p``)."""
     peers = df[is_peer(df)]
     exact = df[df["tol_label"] == EXACT_LABEL]
     if peers.empty or exact.empty:
         return {}
     ours_config = str(exact["config"].iloc[0])
     n_dofs = df.drop_duplicates("N").set_index("N")["n_dofs"]
+    cheapest = _cheapest(df[df["status"] == "ok"], Ns, t1)
+    names = list(dict.fromkeys(peers["config"]))
     ratio = []
     for N in Ns:
         ours = cheapest.get(N, {}).get(ours_config)
-        runs = {c: v for c, v in cheapest.get(N, {}).items() if c in set(peers["config"])}
-        runs = {c: v for c, v in runs.items() if _status(df, N, c, v["tol_label"]) == "ok"}
+        runs = {c: v for c, v in cheapest.get(N, {}).items() if c in names}
         best = min(runs.items(), key=lambda kv: kv[1]["time_s"]) if runs else None
         ratio.append(
             {
@@ -235,19 +236,15 @@ def _peers(df: pd.DataFrame, Ns: Sequence[int], cheapest: Mapping[int, Mapping[s
             }
         )
     scaling = {}
-    for config in dict.fromkeys(peers["config"]):
-        points = [
-            (N, float(n_dofs[N]), cheapest[N][config]["time_s"], cheapest[N][config]["tol_label"])
-            for N in Ns
-            if config in cheapest.get(N, {}) and _status(df, N, config, cheapest[N][config]["tol_label"]) == "ok"
-        ]
+    for config in names:
+        points = [(N, float(n_dofs[N]), cheapest[N][config]) for N in Ns if config in cheapest.get(N, {})]
         rows = peers[peers["config"] == config]
         scaling[config] = {
             "label": str(rows["label"].iloc[0]),
             "N": [p[0] for p in points],
-            "time_s": [p[2] for p in points],
-            "tol_label": [p[3] for p in points],
-            "exponent": _fit_exponent([p[1] for p in points], [p[2] for p in points]),
+            "time_s": [p[2]["time_s"] for p in points],
+            "tol_label": [p[2]["tol_label"] for p in points],
+            "exponent": _fit_exponent([p[1] for p in points], [p[2]["time_s"] for p in points]),
             "statuses": rows["status"].value_counts().to_dict(),
             "reasons": sorted({str(r) for r in rows["converged_reason"] if str(r) and str(r) != "nan"}),
         }
@@ -265,13 +262,7 @@ def _peers(df: pd.DataFrame, Ns: Sequence[int], cheapest: Mapping[int, Mapping[s
 def peer_comparison(df: pd.DataFrame, table1_norms: Sequence[str]) -> dict[str, Any]:
     """``findings(...)["peers"]`` alone (for the figures)."""
     Ns = sorted(int(N) for N in df["N"].unique())
-    t1 = [n for n in table1_norms if f"total_{n}" in df.columns]
-    return _peers(df, Ns, _cheapest(df, Ns, t1))
-
-
-def _status(df: pd.DataFrame, N: int, config: str, tol_label: str) -> str:
-    rows = df[(df["N"] == N) & (df["config"] == config) & (df["tol_label"] == tol_label)]
-    return str(rows["status"].iloc[0]) if len(rows) else ""
+    return _peers(df, Ns, [n for n in table1_norms if f"total_{n}" in df.columns])
 
 
 def _machine(df: pd.DataFrame) -> dict[str, Any]:
@@ -328,7 +319,7 @@ def findings(
         "cells": cells,
         "needed": _needed(cells),
         "cheapest": cheapest,
-        "peers": _peers(df, Ns, cheapest),
+        "peers": _peers(df, Ns, t1),
         "eoc": _l4_eocs(df, Ns, paper_rates, paper_l4),
         "paper_l4_eoc": paper_rates,
         "exact": _exact_cost(df, Ns),

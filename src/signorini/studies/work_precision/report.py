@@ -140,7 +140,8 @@ PEERS_INTRO = (
     "u = 0 (best of 3 when under 1 s); the set-up (matrix, vectors, solver, `setFromOptions`, `setUp`) is the "
     "`setup_s` column of the CSV. Each answer passes our KKT certificate like every other; `failed` carries "
     "PETSc's converged reason. Tolerance: every stopping tolerance of the method (SNES `rtol`, `stol`; TAO "
-    "`gttol`; the inner Krylov `rtol`) set to it."
+    "`gttol`; the inner Krylov `rtol`) set to it. Each configuration's jobs ran at their own time and load, so the "
+    "ratios below move with the load; `benchmarks/peers.py` times ours and the strongest peers alternately."
 )
 
 
