@@ -33,7 +33,13 @@ import numpy as np
 
 from signorini.fem.boundary import singular_points
 from signorini.fem.norm_names import parse_norm_name
-from signorini.fem.norms import Conventions, boundary_error
+from signorini.fem.norms import (
+    Conventions,
+    ErrorField,
+    boundary_error,
+    boundary_l2_norm,
+    h12_interpolation_norm,
+)
 from signorini.fem.quadrature import gauss_legendre_01, stroud_conical
 
 if TYPE_CHECKING:
@@ -356,12 +362,8 @@ def _boundary_norm(problem, mesh, u_h, spec, conv: Conventions, rtol: float) -> 
     levels: list[dict] = []
     for n in BOUNDARY_LEVELS:
         eb, dteb, ds = boundary_error(problem, mesh, u_h, n)
-        l2, semi = float(np.sqrt(np.sum(eb**2 * ds))), float(np.sqrt(np.sum(dteb**2 * ds)))
-        if spec.family == "L2boundary":
-            value = l2
-        else:
-            h1 = float(np.hypot(l2, semi)) if conv.h12_form == "geometric_full" else semi
-            value = float(np.sqrt(l2 * h1))
+        trace = ErrorField(None, None, None, None, None, None, eb, dteb, ds, conv)  # the paper's formulas
+        value = boundary_l2_norm(trace) if spec.family == "L2boundary" else h12_interpolation_norm(trace)
         levels.append({"level": n, "value": value})
         if _settled(levels, rtol):
             break
