@@ -24,7 +24,7 @@ import json
 import os
 import tempfile
 import zipfile
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
 
 import numpy as np
@@ -93,14 +93,16 @@ def content_digest(path: str | os.PathLike) -> str:
         raise CorruptArtifactError(f"{path}: unreadable ({err})") from err
 
 
-def changed_input(provenance: dict | None) -> str | None:
+def changed_input(provenance: dict | None, digest: Callable[[str], str] | None = None) -> str | None:
     """The first input recorded in ``provenance`` whose current content differs from the recorded
-    digest (None when all agree; a missing or unreadable input is left to the workflow)."""
+    digest (None when all agree; a missing or unreadable input is left to the workflow).
+    ``digest``: ``content_digest`` or a memoised one (many artifacts share an input)."""
+    digest = digest or content_digest
     for path, recorded in ((provenance or {}).get("inputs") or {}).items():
         if not Path(path).is_file():
             continue
         try:
-            if content_digest(path) != recorded:
+            if digest(path) != recorded:
                 return path
         except CorruptArtifactError:
             continue

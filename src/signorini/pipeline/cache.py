@@ -10,6 +10,7 @@ Snakemake call that runs jobs moves anything (``executes``): a dry run, ``--lint
 from __future__ import annotations
 
 import csv
+import functools
 import io
 import math
 import os
@@ -19,7 +20,14 @@ import time
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 
-from signorini.pipeline.artifacts import CorruptArtifactError, changed_input, load_json, load_npz, provenance_of
+from signorini.pipeline.artifacts import (
+    CorruptArtifactError,
+    changed_input,
+    content_digest,
+    load_json,
+    load_npz,
+    provenance_of,
+)
 
 
 def _csv_ok(path: Path, rows_expected: Sequence[str] | None = None) -> bool:
@@ -189,10 +197,11 @@ def stale_artifacts(paths: Iterable, current_code: Callable[[str], str]) -> list
         except CorruptArtifactError:
             continue  # the damage check moves it
     stale: dict[str, str] = {}
+    digest = functools.cache(content_digest)  # the norms of a mesh share its solution
     for path, prov in recorded.items():
         if prov.get("code") and prov["code"] != current_code(prov["rule"]):
             stale[path] = "was computed by other code than the current one"
-        elif changed := changed_input(prov):
+        elif changed := changed_input(prov, digest):
             stale[path] = f"was computed from another {changed} than the one now on disk"
     grown = True
     while grown:  # and everything computed from a stale artifact
