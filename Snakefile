@@ -47,3 +47,6 @@ rule all:
     input:
         PAPER_OUTPUTS,
     localrule: True
+
+
+IMPORTS.save()  # the code inputs' import cache (common.smk)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import ast
 import json
+import os
 import subprocess
 import sys
 import textwrap
@@ -21,7 +22,7 @@ import pytest
 from conftest import BUILT_TARGETS
 from helpers import ROOT, clone_built, dry_run_jobs, job_key
 
-from signorini.pipeline.codedeps import _imports, import_closure
+from signorini.pipeline.codedeps import ImportCache, _imports, import_closure
 
 SRC = ROOT / "src"
 PACKAGE = SRC / "signorini"
@@ -100,6 +101,37 @@ def test_import_closure_follows_every_kind_of_import(tmp_path):
         "signorini/b/deep.py",  # ``import a.b as c``
         "signorini/c.py",  # ``from ..c import name``
     }
+
+
+def test_the_import_cache_holds_only_while_a_file_is_unchanged(tmp_path):
+    """Direct imports come from the cache file in another process, until the file's content changes
+    (even with its size and modification time kept)."""
+    src = tmp_path / "src"
+    (src / "signorini").mkdir(parents=True)
+    for name, text in {"__init__.py": "", "a.py": "", "b.py": "", "c.py": ""}.items():
+        (src / "signorini" / name).write_text(text)
+    script, cache_file = tmp_path / "script.py", tmp_path / "cache/imports.json"
+    script.write_text("from signorini import a\n")
+
+    def closure() -> set[str]:
+        cache = ImportCache(cache_file)  # a new process
+        found = {p.name for p in import_closure(script, src, cache)}
+        cache.save()
+        assert found == {p.name for p in import_closure(script, src)}  # the same as without a cache
+        return found
+
+    assert closure() == {"__init__.py", "a.py"}
+    entries = json.loads(cache_file.read_text())
+    assert len(entries) == 3  # the script, signorini/__init__.py, a.py
+    (src / "signorini/a.py").write_text("from signorini import b\n")  # a new import, new size
+    assert closure() == {"__init__.py", "a.py", "b.py"}
+    stat = (src / "signorini/a.py").stat()
+    (src / "signorini/a.py").write_text("from signorini import c\n")  # same size, same time
+    os.utime(src / "signorini/a.py", ns=(stat.st_atime_ns, stat.st_mtime_ns))
+    assert closure() == {"__init__.py", "a.py", "c.py"}
+    cache_file.write_text("{truncated")  # a damaged cache is an empty one
+    assert closure() == {"__init__.py", "a.py", "c.py"}
+    assert json.loads(cache_file.read_text())
 
 
 def test_every_rule_with_a_script_lists_its_closure(tmp_path):

@@ -364,3 +364,36 @@ def test_csv_check_detects_truncation(tmp_path):
     assert artifact_ok(tmp_path / "eoc.csv")
     (tmp_path / "eoc.csv").write_text("N,h,L4\n21,0.047,1.9\n")
     assert not artifact_ok(tmp_path / "eoc.csv")
+
+
+PER_MESH = ("--config", "norm_jobs=per_mesh")
+
+
+def test_per_mesh_norm_jobs_compute_the_same_norms_and_switching_reruns_nothing(built_repo, tmp_path):
+    """``norm_jobs: per_mesh`` (the slurm profile): one job per mesh computes all of the scene's
+    norms, to the same bits as one job per norm; artifacts of either mode satisfy the other; a norm
+    outside the scene's list stays a job of its own; runtime.csv has one row per mesh for them."""
+    repo = clone_built(built_repo, tmp_path / "repo")
+    target = "results/smoke/errors.csv"
+    assert planned(snakemake(repo, "-n", *PER_MESH, "--", target)) == []  # per_norm artifacts serve
+    norms = yaml.safe_load((repo / "workflow/config.yaml").read_text())["scenes"]["smoke"]["norms"]
+    Ns = [11, 21, 41]
+    before = {(N, n): load_json(repo / f"results/smoke/N{N}/norms/{n}.json") for N in Ns for n in norms}
+    errors_before = (repo / target).read_bytes()
+    for path in (repo / "results/smoke").glob("N*/norms/*.json"):
+        path.unlink()
+    proc = snakemake(repo, "-c2", *PER_MESH, "--", target, "paper_figures/runtime.csv")
+    ran = [(rule, wc.get("N")) for rule, wc in planned(proc) if rule.startswith("norm")]
+    assert sorted(ran) == [("norms_smoke", str(N)) for N in Ns]
+    for (N, n), old in before.items():
+        new = load_json(repo / f"results/smoke/N{N}/norms/{n}.json")
+        assert new["value"] == old["value"], (N, n)
+        assert new["timings"]["mesh_shared_by"] == norms
+    assert (repo / target).read_bytes() == errors_before
+    rows = list(csv.DictReader((repo / "paper_figures/runtime.csv").open()))
+    assert [(r["rule"], r["N"]) for r in rows if r["rule"].startswith("norm")] == [("norms", str(N)) for N in Ns]
+    assert all(r["norm"] == " ".join(norms) and float(r["timer_s"]) > 0 for r in rows if r["rule"] == "norms")
+    assert planned(snakemake(repo, "-n", "--", target)) == []  # and back: per_mesh artifacts serve
+    extra = "results/smoke/N21/norms/L8.json"  # not in the scene's list: one job of its own
+    only = planned(snakemake(repo, "-n", *PER_MESH, "--", extra))
+    assert only == [("norm", {"scene": "smoke", "N": "21", "norm": "L8"})]

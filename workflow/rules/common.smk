@@ -23,7 +23,7 @@ from signorini.pipeline.cache import (
     remove_stale,
     warn_corrupt,
 )
-from signorini.pipeline.codedeps import code_inputs
+from signorini.pipeline.codedeps import ImportCache, code_inputs
 from signorini.pipeline.config import ConfigError, check_config
 from signorini.studies.stability import atlas as stab_atlas
 from signorini.studies.work_precision import study as wp_study
@@ -82,6 +82,9 @@ wildcard_constraints:
 PATHS = paths.PATHS
 FIGURES = paths.FIGURES
 FIG = config["figures_scene"]  # the scene paper_figures/ is rendered from
+# a mesh's jobs on a cluster (discretise, solve, its norms): one job group, named as in the
+# slurm profile's `groups` (group names of the command line are not known while parsing)
+MESH_GROUP = "mesh"
 THEORY = "theory"  # the scene rendered into paper_figures/theory*
 WP = "work_precision"  # the scene rendered into paper_figures/work_precision*, cost_of_accuracy*
 STAB = "stability"  # the scene rendered into paper_figures/stability.*
@@ -103,6 +106,11 @@ def scene_param(key):
     return lambda wc: scene_of(wc)[key]
 
 
+# every Snakemake process parses this file (a cluster: each job): the direct imports of unchanged
+# files come from a cache in .snakemake/ (saved at the end of the Snakefile)
+IMPORTS = ImportCache(paths.IMPORT_CACHE)
+
+
 def code(script):
     """A rule's code inputs: its script and every package module the script imports, directly
     or indirectly (signorini.pipeline.codedeps), so that an edit reruns exactly its jobs.
@@ -111,6 +119,7 @@ def code(script):
         Path(workflow.basedir) / "workflow" / "scripts" / f"{script}.py",
         SRC,
         os.getcwd(),
+        IMPORTS,
     )
 
 
@@ -128,10 +137,16 @@ def reported(outputs, caption, category, subcategory=None):
     }
 
 
+# the rules of norm_jobs: per_mesh, one per scene: norms_<scene> (scene.smk); they run norm.py
+NORMS_RULE = "norms_{}"
+
+
 @functools.cache
 def current_code_digest(rule):
-    """The digest of a rule's code inputs now (what its jobs record at their start)."""
-    return code_digest(code(rule))
+    """The digest of a rule's code inputs now (what its jobs record at their start); a rule's
+    script has the rule's name, the norms_<scene> rules run norm.py (in either mode)."""
+    is_norms = any(rule == NORMS_RULE.format(scene) for scene in config["scenes"])
+    return code_digest(code("norm" if is_norms else rule))
 
 
 def norm_jsons(scene, norms):
@@ -157,21 +172,28 @@ def flat(mapping):
 
 
 def runtime_jobs(scene):
-    """The discretise, solve and norm jobs of a scene whose run times runtime.csv reports."""
+    """The discretise, solve and norm jobs of a scene whose run times runtime.csv reports (with
+    norm_jobs: per_mesh, one job per mesh for the scene's norms: its row names them all).
+    """
     norms = list(
         dict.fromkeys([*scene_of(scene)["norms"], *TABLE1_NORMS, *FIGURE3_NORMS])
     )
+    batched = scene_of(scene)["norms"] if config["norm_jobs"] == "per_mesh" else []
     jobs = []
     for N in scene_of(scene)["N"]:
-        for rule, name, norm in (
-            ("discretise", "discretise", ""),
-            ("solve", "solve", ""),
-        ):
-            artifact = getattr(rules, rule).output.json
-            jobs.append((rule, N, norm, name, artifact.format(scene=scene, N=N)))
-        for n in norms:
-            artifact = rules.norm.output.json.format(scene=scene, N=N, norm=n)
-            jobs.append(("norm", N, n, f"norm_{n}", artifact))
+
+        def norm_json(n):
+            return rules.norm.output.json.format(scene=scene, N=N, norm=n)
+
+        for step in ("discretise", "solve"):
+            artifact = getattr(rules, step).output.json.format(scene=scene, N=N)
+            jobs.append((step, N, "", step, [artifact]))
+        if batched:
+            jobs.append(
+                ("norms", N, " ".join(batched), "norms", list(map(norm_json, batched)))
+            )
+        for n in (n for n in norms if n not in batched):
+            jobs.append(("norm", N, n, f"norm_{n}", [norm_json(n)]))
     return [
         {
             "rule": rule,
@@ -179,9 +201,9 @@ def runtime_jobs(scene):
             "N": N,
             "norm": norm,
             "benchmark": paths.benchmark("mesh", name, scene=scene, N=str(N)),
-            "artifact": artifact,
+            "artifacts": artifacts,
         }
-        for rule, N, norm, name, artifact in jobs
+        for rule, N, norm, name, artifacts in jobs
     ]
 
 

@@ -102,6 +102,7 @@ rule h12_boundary:
         csv=PATHS["h12_boundary_csv"].format(scene=FIG),
     log:
         paths.log("scene", "h12_boundary", scene=FIG),
+    localrule: True
     conda:
         "../envs/signorini.yaml"
     params:
@@ -136,7 +137,7 @@ rule runtime:
     """Run times of the rendered scene's discretise, solve and norm jobs."""
     input:
         benchmarks=[job["benchmark"] for job in runtime_jobs(FIG)],
-        artifacts=[job["artifact"] for job in runtime_jobs(FIG)],
+        artifacts=[path for job in runtime_jobs(FIG) for path in job["artifacts"]],
         code=code("runtime"),
     output:
         **reported(FIGURES["runtime"], "runtime", "Paper", "Run times"),

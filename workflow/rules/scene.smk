@@ -1,6 +1,7 @@
 # The chain every scene runs, per scene and N: discretise -> solve -> norm (one job per norm,
-# so a target computes only the norms it needs) -> errors.csv -> eoc.csv. The tables errors and
-# eoc are local rules (seconds): on a cluster they run on the submitting node.
+# so a target computes only the norms it needs; or one per mesh, norm_jobs: per_mesh) ->
+# errors.csv -> eoc.csv. The tables errors and eoc are local rules (seconds): on a cluster they
+# run on the submitting node.
 
 
 rule discretise:
@@ -77,6 +78,55 @@ rule norm:
         conventions=scene_param("conventions"),
     script:
         "../scripts/norm.py"
+
+
+# norm_jobs: per_mesh (the slurm profile): one job per mesh computes all of its scene's norms,
+# since on a cluster every job pays a scheduling round trip and a Snakemake start. Same script,
+# inputs and parameters as `norm`, so artifacts of either mode are interchangeable: switching
+# reruns nothing. Norms outside the scene's list (a target's extra norms) stay one job each.
+if config["norm_jobs"] == "per_mesh":
+    for _scene in config["scenes"]:
+        _norms = scene_of(_scene)["norms"]
+
+        rule:
+            """All of a scene's norms of the error u - u_h on one mesh, one after another."""
+            name:
+                NORMS_RULE.format(_scene)
+            input:
+                solution=rules.solve.output.npz.format(scene=_scene, N="{N}"),
+                code=code("norm"),
+            output:
+                expand(
+                    rules.norm.output.json,
+                    scene=_scene,
+                    norm=_norms,
+                    allow_missing=True,
+                ),
+            log:
+                paths.log("mesh", "norms", scene=_scene),
+            benchmark:
+                paths.benchmark("mesh", "norms", scene=_scene)
+            # the group the slurm profile gives the mesh's other jobs (clusters only)
+            group:
+                MESH_GROUP
+            conda:
+                "../envs/signorini.yaml"
+            resources:
+                mem_mb=lambda wc: resources.mem_mb("norm", wc.N),
+                runtime=lambda wc, n=len(_norms): resources.norms_runtime_min(wc.N, n),
+            params:
+                problem=scene_of(_scene)["problem"],
+                diagonal=scene_of(_scene)["diagonal"],
+                conventions=scene_of(_scene)["conventions"],
+            script:
+                "../scripts/norm.py"
+
+        workflow.ruleorder(NORMS_RULE.format(_scene), "norm")
+        # Snakemake's code trigger compares a rule's source text, here the script line, which
+        # differs from norm's only by its indentation: the same script, so the same code
+        workflow.get_rule(NORMS_RULE.format(_scene)).run_func_src = (
+            workflow.get_rule("norm").run_func_src
+        )
 
 
 rule errors:

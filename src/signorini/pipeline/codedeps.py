@@ -6,12 +6,19 @@ level or inside a function, where the heavy imports live; not under ``if TYPE_CH
 which never runs), followed recursively, plus the ``__init__.py`` of every package on the way
 (Python runs them on import).  The Snakefile lists the result as the rule's ``code`` input, so
 editing any module a job can run re-runs that job, and nothing else.
+
+Every Snakemake process parses the Snakefile, including each job a cluster runs; ``ImportCache``
+keeps each file's direct imports on disk, keyed by the digest of its content, so that a process
+parses only the files that changed (reading and hashing a file costs a tenth of parsing it).
 """
 
 from __future__ import annotations
 
 import ast
+import hashlib
+import json
 import os
+import tempfile
 from collections.abc import Iterator
 from functools import cache
 from pathlib import Path
@@ -65,9 +72,14 @@ def _module_name(path: Path, src: Path) -> str:
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 
+def _digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
 @cache
-def _direct(path: Path, src: Path, mtime_ns: int) -> frozenset[Path]:
-    """Package files one file imports directly (with the ``__init__.py`` of their packages)."""
+def _direct(path: Path, src: Path, digest: str) -> frozenset[Path]:
+    """Package files one file imports directly (with the ``__init__.py`` of their packages);
+    ``digest``, of the file's content, keys the memo."""
     module = _module_name(path, src) if path.is_relative_to(src) else "__main__"
     tree = ast.parse(path.read_text(), filename=str(path))
     found: set[Path] = set()
@@ -81,24 +93,74 @@ def _direct(path: Path, src: Path, mtime_ns: int) -> frozenset[Path]:
     return frozenset(found)
 
 
-def import_closure(path: str | os.PathLike, src: str | os.PathLike) -> list[Path]:
+class ImportCache:
+    """The direct imports of files, kept in a JSON file between processes: an entry holds only
+    while the file's content has the recorded digest.  A missing or damaged
+    cache file is an empty cache; ``save`` replaces it atomically (concurrent processes: the last
+    one wins, each with valid entries)."""
+
+    def __init__(self, path: str | os.PathLike) -> None:
+        self.path = Path(path)
+        try:
+            entries = json.loads(self.path.read_text())
+            self._entries = entries if isinstance(entries, dict) else {}
+        except (OSError, ValueError):
+            self._entries = {}
+        self._changed = False
+
+    def direct(self, path: Path, src: Path) -> frozenset[Path]:
+        """``path``'s direct package imports under ``src``, from the cache when the file is unchanged."""
+        key, digest = f"{src}::{path}", _digest(path)
+        entry = self._entries.get(key)
+        if isinstance(entry, list) and len(entry) == 2 and entry[0] == digest:
+            return frozenset(Path(p) for p in entry[1])
+        found = _direct(path, src, digest)
+        self._entries[key] = [digest, sorted(map(str, found))]
+        self._changed = True
+        return found
+
+    def save(self) -> None:
+        """Write the cache if it gained entries (best effort: a read-only directory keeps none)."""
+        if not self._changed:
+            return
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            fd, tmp = tempfile.mkstemp(dir=self.path.parent, prefix=f".{self.path.name}.", suffix=".tmp")
+            with os.fdopen(fd, "w") as fh:
+                json.dump(self._entries, fh)
+            os.replace(tmp, self.path)
+            self._changed = False
+        except OSError:
+            pass
+
+
+def import_closure(
+    path: str | os.PathLike, src: str | os.PathLike, cache: ImportCache | None = None
+) -> list[Path]:
     """Every package file under ``src`` that ``path`` imports, directly or indirectly (sorted;
-    ``path`` itself is included when it lies under ``src``)."""
+    ``path`` itself is included when it lies under ``src``); ``cache`` keeps the direct imports
+    of unchanged files between processes."""
     path, src = Path(path).resolve(), Path(src).resolve()
     seen: set[Path] = {path} if path.is_relative_to(src) else set()
     todo = [path]
     while todo:
         current = todo.pop()
-        for target in _direct(current, src, current.stat().st_mtime_ns):
+        direct = cache.direct(current, src) if cache else _direct(current, src, _digest(current))
+        for target in direct:
             if target not in seen:
                 seen.add(target)
                 todo.append(target)
     return sorted(seen)
 
 
-def code_inputs(script: str | os.PathLike, src: str | os.PathLike, relative_to: str | os.PathLike) -> list[str]:
+def code_inputs(
+    script: str | os.PathLike,
+    src: str | os.PathLike,
+    relative_to: str | os.PathLike,
+    cache: ImportCache | None = None,
+) -> list[str]:
     """The rule's code inputs: its script and the package files it runs, as paths relative to
     ``relative_to`` (the workflow's working directory)."""
     base = Path(relative_to).resolve()
-    files = [Path(script).resolve(), *import_closure(script, src)]
+    files = [Path(script).resolve(), *import_closure(script, src, cache)]
     return [os.path.relpath(f, base) for f in dict.fromkeys(files)]

@@ -48,6 +48,7 @@ BENCHMARKS = {
 
 # the PETSc peers' driver: an external program (stdlib, numpy, petsc4py), a code input of its jobs
 PEER_DRIVER = "workflow/peers/petsc_peer.py"
+IMPORT_CACHE = ".snakemake/signorini/imports.json"  # codedeps.ImportCache: each file's direct imports
 
 REFERENCES = {
     "paper_table1": f"{REFERENCE}/paper_table1.csv",

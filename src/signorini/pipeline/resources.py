@@ -33,10 +33,16 @@ def runtime_min(rule: str, N: int) -> int:
     return base + int(N) ** 2 // per
 
 
+def norms_runtime_min(N: int, n_norms: int) -> int:
+    """The run-time request of a job computing ``n_norms`` norms on mesh ``N`` one after another
+    (``norm_jobs: per_mesh``), in minutes."""
+    return n_norms * runtime_min("norm", N)
+
+
 def mesh_group_runtime_min(N: int, n_norms: int) -> int:
     """The run-time request of a mesh's Slurm job in the slurm profile, whose group runs the mesh's
-    discretise, solve and ``n_norms`` norm jobs one after another: the sum of theirs, in minutes."""
-    return runtime_min("discretise", N) + runtime_min("solve", N) + n_norms * runtime_min("norm", N)
+    discretise, solve and ``n_norms`` norms one after another: the sum of theirs, in minutes."""
+    return runtime_min("discretise", N) + runtime_min("solve", N) + norms_runtime_min(N, n_norms)
 
 
 def machine_mem_mb() -> int:

@@ -11,11 +11,13 @@ from collections.abc import Mapping, Sequence
 from signorini.pipeline.artifacts import CorruptArtifactError, atomic_write_text, load_json
 
 BENCHMARK_FIELDS = {"s": "benchmark_wall_s", "cpu_time": "benchmark_cpu_s", "max_rss": "benchmark_max_rss_mb"}
-# the in-job timer of each rule: (keys of the artifact's timings summed, what they cover)
+# the in-job timer of each rule: (keys of the first artifact's timings, keys of every artifact's
+# timings, what they cover); a per-mesh norms job builds its mesh once for all its norms
 TIMERS = {
-    "discretise": (("build_s",), "mesh + assembly"),
-    "solve": (("load_s", "solve_s"), "load system + solve"),
-    "norm": (("mesh_s", "norm_s"), "mesh + error evaluation + norm"),
+    "discretise": ((), ("build_s",), "mesh + assembly"),
+    "solve": ((), ("load_s", "solve_s"), "load system + solve"),
+    "norm": ((), ("mesh_s", "norm_s"), "mesh + error evaluation + norm"),
+    "norms": (("mesh_s",), ("norm_s",), "mesh + error evaluation + each norm"),
 }
 COLUMNS = ["rule", "scene", "N", "norm", *BENCHMARK_FIELDS.values(), "timer_s", "timer_scope"]
 
@@ -28,17 +30,23 @@ def _last_benchmark(path: str | os.PathLike) -> Mapping[str, str]:
     return rows[-1]
 
 
-def _timer(rule: str, artifact: Mapping) -> float:
-    """The in-job timer of a job's artifact (its ``timings``)."""
-    timings = artifact.get("timings", {})
-    return sum(float(timings.get(key, 0.0)) for key in TIMERS[rule][0])
+def _timer(rule: str, artifacts: Sequence[Mapping]) -> float:
+    """The in-job timer of a job from its artifacts' ``timings``."""
+    once, each, _ = TIMERS[rule]
+
+    def total(artifact: Mapping, keys: Sequence[str]) -> float:
+        timings = artifact.get("timings", {})
+        return sum(float(timings.get(key, 0.0)) for key in keys)
+
+    return total(artifacts[0], once) + sum(total(artifact, each) for artifact in artifacts)
 
 
 def runtime_stage(jobs: Sequence[Mapping], out_csv: str | os.PathLike) -> None:
     """``runtime.csv`` from the jobs' ``benchmark:`` files and their in-job timers.
 
-    ``jobs``: one mapping per job with ``rule``, ``scene``, ``N``, ``norm`` (or ""),
-    ``benchmark`` (the TSV path) and ``artifact`` (the job's JSON, holding its timers).
+    ``jobs``: one mapping per job with ``rule``, ``scene``, ``N``, ``norm`` (or "", or the norms
+    of a per-mesh job), ``benchmark`` (the TSV path) and ``artifacts`` (the job's JSONs, holding
+    its timers).
     ``benchmark_*`` columns time the whole job (interpreter start, imports, I/O);
     ``timer_s`` is the timer around the measured call inside the job (``timer_scope``).
     """
@@ -51,7 +59,7 @@ def runtime_stage(jobs: Sequence[Mapping], out_csv: str | os.PathLike) -> None:
         for key, column in BENCHMARK_FIELDS.items():
             value = bench.get(key, "")
             record[column] = f"{float(value):.3f}" if value not in ("", "NA", "-") else ""
-        record["timer_s"] = f"{_timer(job['rule'], load_json(job['artifact'])):.3f}"
-        record["timer_scope"] = TIMERS[job["rule"]][1]
+        record["timer_s"] = f"{_timer(job['rule'], [load_json(path) for path in job['artifacts']]):.3f}"
+        record["timer_scope"] = TIMERS[job["rule"]][2]
         writer.writerow(record)
     atomic_write_text(out_csv, out.getvalue())
