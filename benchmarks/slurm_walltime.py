@@ -4,8 +4,10 @@
 
 Starts a single-node Slurm with accounting (``scripts/slurm/start-cluster --accounting``; CPUs
 and memory of this machine), then in fresh copies of the repository (Snakefile, workflow/, src/)
-runs ``snakemake -c2 all`` (local), ``snakemake all --profile workflow/profiles/slurm`` (Slurm)
-and the local run once more, each from an empty cache, and stops the cluster.  Records each wall
+runs ``snakemake -c2 all`` (local), ``snakemake all --profile workflow/profiles/slurm`` (Slurm),
+the same with one job per norm (``--config norm_jobs=per_norm``), the local run once more and
+once with the Slurm profile's ``norm_jobs: per_mesh``, each from an empty cache, and stops the
+cluster.  Records each wall
 time (whole Snakemake calls), the 1-minute load average before each run, the Slurm jobs
 submitted, and the ratio of the Slurm time to the mean of the two local times.  The JSON is
 written atomically.
@@ -25,7 +27,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
+LOCAL_PER_MESH = ("-c2", "all", "--config", "norm_jobs=per_mesh")
 SLURM_ARGS = ("--profile", "workflow/profiles/slurm", "--default-resources", "slurm_account=signorini")
+SLURM_PER_NORM = ("all", *SLURM_ARGS, "--config", "norm_jobs=per_norm")
 
 
 def fresh_copy(dest: Path) -> Path:
@@ -67,7 +71,11 @@ def main(argv: list[str] | None = None) -> int:
             runs = {
                 "local_1": timed_run(fresh_copy(Path(tmp) / "local_1"), ("-c2", "all"), env),
                 "slurm": timed_run(fresh_copy(Path(tmp) / "slurm"), ("all", *SLURM_ARGS), env_slurm),
+                # the same profile with one job per norm: what the per-mesh norms job saves
+                "slurm_per_norm": timed_run(fresh_copy(Path(tmp) / "slurm_per_norm"), SLURM_PER_NORM, env_slurm),
                 "local_2": timed_run(fresh_copy(Path(tmp) / "local_2"), ("-c2", "all"), env),
+                # the Slurm route's job granularity, locally: what batching the norms alone changes
+                "local_per_mesh": timed_run(fresh_copy(Path(tmp) / "local_per_mesh"), LOCAL_PER_MESH, env),
             }
         finally:
             subprocess.run([ROOT / "scripts/slurm/stop-cluster", state], check=False)
@@ -87,7 +95,9 @@ def main(argv: list[str] | None = None) -> int:
     print(
         f"cold all: local {runs['local_1']['wall_s']:.0f} s / {runs['local_2']['wall_s']:.0f} s, through Slurm "
         f"{result['slurm_s']:.0f} s ({runs['slurm']['slurm_jobs']} Slurm jobs): ratio "
-        f"{result['ratio_slurm_to_local']:.2f} -> {args.out}"
+        f"{result['ratio_slurm_to_local']:.2f}; through Slurm with norm_jobs=per_norm "
+        f"{runs['slurm_per_norm']['wall_s']:.0f} s; local with norm_jobs=per_mesh "
+        f"{runs['local_per_mesh']['wall_s']:.0f} s -> {args.out}"
     )
     return 0
 

@@ -56,16 +56,16 @@ def _smoke_config(N: list[int]) -> dict:
 
 
 def test_a_job_longer_than_the_partition_allows_is_refused():
-    """A mesh's Slurm job runs its discretise, solve and 7 norm jobs one after another: it
-    requests the sum of their run times (at N = 1001: 55 + 55 + 7 * 25 min)."""
+    """A mesh's Slurm job runs its discretise, solve and 7 norms one after another: it requests
+    the sum of their run times (at N = 2001: 25 + 45 + (5 + 7 * 8) min)."""
     node = NodeLimits("short", 2, 64000, 120)
-    check_config(_smoke_config([11, 201]), node=node)
+    check_config(_smoke_config([11, 1001]), node=node)
     message = (
-        r"N\[1\]: N = 1001 requests 285 min for its mesh job \(discretise, solve and 7 norms one after "
+        r"N\[1\]: N = 2001 requests 131 min for its mesh job \(discretise, solve and 7 norms one after "
         r"another\), more than the time limit of 120 min of Slurm partition short"
     )
     with pytest.raises(ConfigError, match=message):
-        check_config(_smoke_config([11, 1001]), node=node)
+        check_config(_smoke_config([11, 2001]), node=node)
     with pytest.raises(ConfigError, match=r"N = 9001 needs about .* GB for its solve job .* more than the 62.5 GB "
                        r"of the largest node of Slurm partition short"):
         check_config(_smoke_config([9001]), node=node)

@@ -71,7 +71,7 @@ rule norm:
         "../envs/signorini.yaml"
     resources:
         mem_mb=lambda wc: resources.mem_mb("norm", wc.N),
-        runtime=lambda wc: resources.runtime_min("norm", wc.N),
+        runtime=lambda wc: resources.norms_runtime_min(wc.N, [wc.norm]),
     params:
         problem=scene_param("problem"),
         diagonal=scene_param("diagonal"),
@@ -113,7 +113,9 @@ if config["norm_jobs"] == "per_mesh":
                 "../envs/signorini.yaml"
             resources:
                 mem_mb=lambda wc: resources.mem_mb("norm", wc.N),
-                runtime=lambda wc, n=len(_norms): resources.norms_runtime_min(wc.N, n),
+                runtime=lambda wc, norms=_norms: resources.norms_runtime_min(
+                    wc.N, norms
+                ),
             params:
                 problem=scene_of(_scene)["problem"],
                 diagonal=scene_of(_scene)["diagonal"],

@@ -75,7 +75,7 @@ def _check_memory(where: str, Ns: list, limit_mb: int, available: str = "availab
             )
 
 
-def _check_runtime(where: str, Ns: list, n_norms: int, node: NodeLimits) -> None:
+def _check_runtime(where: str, Ns: list, norms: list, node: NodeLimits) -> None:
     """Each mesh's Slurm job (its discretise, solve and norm jobs, one after another) within the
     partition's time limit: Slurm would leave a longer job pending for ever."""
     from signorini.pipeline.resources import mesh_group_runtime_min
@@ -83,10 +83,10 @@ def _check_runtime(where: str, Ns: list, n_norms: int, node: NodeLimits) -> None
     if node.time_limit_min is None:
         return
     for i, N in enumerate(Ns):
-        need = mesh_group_runtime_min(N, n_norms)
+        need = mesh_group_runtime_min(N, norms)
         if need > node.time_limit_min:
             raise ConfigError(
-                f"{where}.N[{i}]: N = {N} requests {need} min for its mesh job (discretise, solve and {n_norms} "
+                f"{where}.N[{i}]: N = {N} requests {need} min for its mesh job (discretise, solve and {len(norms)} "
                 f"norms one after another), more than the time limit of {node.time_limit_min} min of Slurm "
                 f"partition {node.partition}"
             )
@@ -116,12 +116,12 @@ def check_config(config: Mapping, mem_limit_mb: int | None = None, node: NodeLim
         where = f"scenes.{name}"
         _check_N(where, scene.get("N", []))
         _check_memory(where, scene.get("N", []), limit, available)
-        if node is not None:
-            _check_runtime(where, scene.get("N", []), len(scene.get("norms", [])), node)
         problem = check_options(f"{where}.solver_options", scene.get("solver", ""), scene.get("solver_options") or {})
         if problem:
             raise ConfigError(problem)
         _check_norms(where, scene.get("norms", []))
+        if node is not None:
+            _check_runtime(where, scene.get("N", []), scene.get("norms", []), node)
         try:
             problem = Problem(**scene.get("problem", {}))
         except (ProblemParameterError, TypeError) as err:

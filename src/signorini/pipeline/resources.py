@@ -1,13 +1,18 @@
 """Memory and run-time requests of the per-mesh jobs, defined once: the rules' ``resources`` and
 the config check's bound use them.  Memory grows with the number of unknowns, (N + 1)² ≈ N²; the
-constants follow the peaks measured at N = 2001 (README: discretise 3.7 GB, solve 7.5 GB, norm
-≤ 1.8 GB, theory_quantities 3.0 GB) with some headroom."""
+constants follow the peaks measured at N = 2001 (discretise 3.8 GB, solve 7.5 GB, a norm ≤ 1.3 GB,
+theory_quantities 4.9 GB) with some headroom.  Run times at N = 2001 on a loaded 2-CPU machine
+(load about 4): discretise 130 s, solve 216 s, a norm 20–80 s, theory_quantities 228 s; the
+requests are about ten times these, since a job that outlives its request is killed."""
 
 from __future__ import annotations
 
 import os
 import subprocess
+from collections.abc import Sequence
 from dataclasses import dataclass
+
+from signorini.fem.norm_names import parse_norm_name
 
 # rule: (base, N² per unit) of the memory request in MB and of the run-time request in minutes
 MEM_MB = {
@@ -17,7 +22,13 @@ MEM_MB = {
     "theory_quantities": (1000, 500),
     "work_precision_measure": (1500, 250),
 }
-RUNTIME_MIN = {"discretise": (5, 20000), "solve": (5, 20000), "norm": (5, 50000), "theory_quantities": (5, 50000)}
+RUNTIME_MIN = {
+    "discretise": (5, 200000),
+    "solve": (5, 100000),  # the active-set steps grow with N: N = 1001 -> 2001 took 8x
+    "norm": (5, 500000),
+    "true_norm": (5, 50000),  # a true norm refines its quadrature: about 20x a convention norm
+    "theory_quantities": (5, 100000),
+}
 SCENE_RULES = ("discretise", "solve", "norm")  # the jobs every scene runs on each mesh
 
 
@@ -33,16 +44,17 @@ def runtime_min(rule: str, N: int) -> int:
     return base + int(N) ** 2 // per
 
 
-def norms_runtime_min(N: int, n_norms: int) -> int:
-    """The run-time request of a job computing ``n_norms`` norms on mesh ``N`` one after another
-    (``norm_jobs: per_mesh``), in minutes."""
-    return n_norms * runtime_min("norm", N)
+def norms_runtime_min(N: int, norms: Sequence[str]) -> int:
+    """The run-time request of a job computing ``norms`` on mesh ``N`` one after another (one norm,
+    or a scene's norms with ``norm_jobs: per_mesh``): one start, and each norm's share, in minutes."""
+    shares = (runtime_min("true_norm" if parse_norm_name(n).true else "norm", N) for n in norms)
+    return RUNTIME_MIN["norm"][0] + sum(share - RUNTIME_MIN["norm"][0] for share in shares)
 
 
-def mesh_group_runtime_min(N: int, n_norms: int) -> int:
+def mesh_group_runtime_min(N: int, norms: Sequence[str]) -> int:
     """The run-time request of a mesh's Slurm job in the slurm profile, whose group runs the mesh's
-    discretise, solve and ``n_norms`` norms one after another: the sum of theirs, in minutes."""
-    return runtime_min("discretise", N) + runtime_min("solve", N) + norms_runtime_min(N, n_norms)
+    discretise, solve and its ``norms`` one after another: the sum of theirs, in minutes."""
+    return runtime_min("discretise", N) + runtime_min("solve", N) + norms_runtime_min(N, norms)
 
 
 def machine_mem_mb() -> int:
