@@ -208,6 +208,34 @@ def test_true_l2_norm_with_a_nonzero_p1_part():
     assert result.value == pytest.approx(math.sqrt(polar_integral(terms)), rel=RTOL)
 
 
+class Scaled:
+    """A·u of another exact solution (linear: every norm of u − A·u_h is A times that of u − u_h)."""
+
+    def __init__(self, base, amplitude: float):
+        self.base, self.A = base, amplitude
+
+    def u(self, x):
+        return self.A * self.base.u(x)
+
+    def grad_u(self, x):
+        return self.A * self.base.grad_u(x)
+
+    def singular_points(self):
+        return self.base.singular_points()
+
+
+@pytest.mark.parametrize("amplitude", [1e-200, 1e300])
+def test_true_norms_scale_with_the_amplitude(amplitude):
+    """No power |e|^p of a true integral norm overflows (A = 10^300) or underflows to a silent zero
+    (A = 10^-200): the integrands are evaluated on e / 2^k, with 2^k near the largest error."""
+    mesh = friedrichs_keller(9)
+    u_h = 0.3 * mesh.p[0] - 0.1 * mesh.p[1]
+    for name in ("L4", "L32", "W116", "H1", "L4plus", "Linf", "W1inf", "H12"):
+        one = true_norm(Harmonic(), mesh, u_h, f"{name}_true").value
+        scaled = true_norm(Scaled(Harmonic(), amplitude), mesh, amplitude * u_h, f"{name}_true").value
+        assert scaled / amplitude == pytest.approx(one, rel=1e-12), name
+
+
 def test_true_norms_of_the_manufactured_error_and_the_gap_to_the_paper_conventions(cache):
     """At N = 21: the true values are converged; the maxima over Ω are at least the maxima over
     the conventions' point sets; L^16 and W^{1,∞} under the conventions are visibly off."""
