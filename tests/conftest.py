@@ -85,7 +85,8 @@ TEST_SCENES = {
     "mine": {"N": [8, 16], "norms": ["L2", "H1"], "solver": "active_set", "problem": PROBLEM},
     "theory": {
         "N": [9, 17, 33],
-        "norms": ["L2", "L4", "L8", "Linf", "W12", "W14", "W1inf", "H1", "H12", "L4plus", "L4minus"],
+        "norms": ["L2", "L4", "L8", "Linf", "W12", "W14", "W1inf", "H1", "H12", "L4plus", "L4minus", "L4_true",
+                  "W1inf_true"],
         "solver": "active_set",
         "problem": PROBLEM,
     },

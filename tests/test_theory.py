@@ -134,6 +134,10 @@ def test_expected_rates():
 def test_theory_target_end_to_end(built_repo):
     md = (built_repo / "paper_figures/theory.md").read_text()
     assert "Supercloseness" in md and "| L4 |" in md
+    # the test scene's true norms: their own EOC table, kept out of the rates against p
+    true_section = md.split("## The same EOCs of the true norms")[1].split("##")[0]
+    assert "| h | L4_true | W1inf_true |" in true_section and "| expected (− ε) | 2.000 | 0.500 |" in true_section
+    assert "| L4_true |" not in md.split("## Rates against p")[1]
     for name in ("theory_rates.png", "theory_extra.png", "theory.csv"):
         assert (built_repo / "paper_figures" / name).stat().st_size > 0
 
