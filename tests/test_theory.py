@@ -157,3 +157,22 @@ def test_table2_rows_give_the_eoc_of_each_mesh_pair():
     np.testing.assert_allclose(t2["L4"], 2.0, rtol=1e-12)
     np.testing.assert_allclose(t2["W1inf"], 0.5, rtol=1e-12)
     assert set(TABLE2_NORMS) >= {"L4", "Linf", "W14", "W1inf", "H12"}
+
+
+def test_the_accuracy_of_the_true_values_is_stated_and_a_miss_is_named():
+    """theory.md states the largest relative quadrature error estimate of the true values and
+    names each value whose levels did not agree to the tolerance."""
+    from signorini.studies.theory.report import accuracy_note
+
+    def record(norm, N, value, estimate, converged):
+        accuracy = {"error_estimate": estimate, "rtol": 1e-4, "converged": converged}
+        return {"norm": norm, "N": N, "value": value, "quadrature_error": accuracy}
+
+    good = [record("L4_true", 101, 2.0, 2e-6, True), record("Linf_true", 201, 1.0, 3e-5, True)]
+    assert accuracy_note(good) == (
+        "Largest estimated quadrature error: 3.0e-05 relative (Linf_true at N = 201); every value converged to 0.0001."
+    )
+    note = accuracy_note([*good, record("Linf_true", 2001, 0.5, 6e-4, False)])
+    assert "1.2e-03 relative (Linf_true at N = 2001)" in note
+    assert "Not converged to 0.0001 within the finest level: Linf_true at N = 2001 (1.2e-03)" in note
+    assert accuracy_note([]) == ""

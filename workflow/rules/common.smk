@@ -164,6 +164,12 @@ def true_table_norms():
     return norm_jsons(FIG, names)
 
 
+def theory_true_norms():
+    """{norm: artifacts} of the theory scene's true norms (their accuracy goes into theory.md)."""
+    names = [n for n in scene_of(THEORY)["norms"] if n == true_name(n)]
+    return norm_jsons(THEORY, names)
+
+
 def flat(mapping):
     return [p for values in mapping.values() for p in values]
 

@@ -33,6 +33,7 @@ rule theory_report:
         theory=lambda wc: expand(
             rules.theory_quantities.output.json, scene=THEORY, N=scene_of(THEORY)["N"]
         ),
+        true_norms=lambda wc: flat(theory_true_norms()),
         code=code("theory_report"),
     output:
         **reported(FIGURES["theory_report"], "theory", "Theory"),
@@ -40,6 +41,8 @@ rule theory_report:
         paths.log("scene", "theory_report", scene=THEORY),
     conda:
         "../envs/signorini.yaml"
+    params:
+        true_norm_jsons=lambda wc: theory_true_norms(),
     script:
         "../scripts/theory_report.py"
 

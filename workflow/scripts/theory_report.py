@@ -6,4 +6,4 @@ from signorini.studies.theory.report import report_stage
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake):
-    report_stage(snakemake.input.errors[0], snakemake.input.theory, snakemake.output)
+    report_stage(snakemake.input.errors[0], snakemake.input.theory, snakemake.output, snakemake.params.true_norm_jsons)

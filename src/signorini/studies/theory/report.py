@@ -182,30 +182,60 @@ def _contact_section(table: pd.DataFrame) -> list[str]:
     return [*lines, "", CONTACT_NOTE, ""]
 
 
+def accuracy_note(accuracy: Sequence[Mapping]) -> str:
+    """One sentence on the true values' accuracy: the largest relative estimate of the quadrature
+    error, and each value whose levels did not agree to the tolerance (``accuracy``: one record per
+    value with ``norm``, ``N``, ``value`` and the artifact's ``quadrature_error``)."""
+    if not accuracy:
+        return ""
+
+    def relative(a: Mapping) -> float:
+        return float(a["quadrature_error"]["error_estimate"]) / float(a["value"]) if a["value"] else 0.0
+
+    worst = max(accuracy, key=relative)
+    rtol = max(float(a["quadrature_error"]["rtol"]) for a in accuracy)
+    text = f"Largest estimated quadrature error: {relative(worst):.1e} relative ({worst['norm']} at N = {worst['N']})"
+    missed = [a for a in accuracy if not a["quadrature_error"]["converged"]]
+    if not missed:
+        return text + f"; every value converged to {rtol:g}."
+    listed = ", ".join(f"{a['norm']} at N = {a['N']} ({relative(a):.1e})" for a in missed)
+    return (
+        text + f". Not converged to {rtol:g} within the finest level: {listed}; a maximum is the largest value "
+        "found, so its estimate is the rise from the previous level."
+    )
+
+
 def findings(
     table: pd.DataFrame,
     rates: pd.DataFrame,
     table2: pd.DataFrame | None = None,
     table2_true: pd.DataFrame | None = None,
+    accuracy: Sequence[Mapping] = (),
 ) -> str:
     """The findings in numbers (markdown); ``table2`` and ``table2_true`` (the true norms) from
-    ``table2_rows``."""
+    ``table2_rows``, ``accuracy`` as for ``accuracy_note``."""
     lines = [INTRO.format(meshes=", ".join(str(n) for n in table["N"]))]
     if table2 is not None and len(table2.columns) > 1:
         lines += _table2_section(table2)
     if table2_true is not None and len(table2_true.columns) > 1:
-        lines += _table2_section(table2_true, "## The same EOCs of the true norms", TABLE2_TRUE_NOTE)
+        note = f"{TABLE2_TRUE_NOTE} {accuracy_note(accuracy)}".strip()
+        lines += _table2_section(table2_true, "## The same EOCs of the true norms", note)
     lines += [*_rates_section(rates), "", _supercloseness_section(table), *_contact_section(table)]
     return "\n".join(lines)
 
 
 def report_stage(
-    errors_csv: str | os.PathLike, theory_jsons: Sequence[str | os.PathLike], outs: Mapping[str, str | os.PathLike]
+    errors_csv: str | os.PathLike,
+    theory_jsons: Sequence[str | os.PathLike],
+    outs: Mapping[str, str | os.PathLike],
+    true_norm_jsons: Mapping[str, Sequence[str | os.PathLike]] | None = None,
 ) -> None:
     """Stage ``theory_report``: the findings, table and figures (``outs``: ``md``, ``csv``,
-    ``rates_pdf``, ``rates_png``, ``extra_pdf``, ``extra_png``)."""
+    ``rates_pdf``, ``rates_png``, ``extra_pdf``, ``extra_png``); ``true_norm_jsons`` (per true
+    norm of the scene, its artifact per N in the order of ``errors.csv``) for their accuracy."""
     from signorini.pipeline.artifacts import load_json
     from signorini.plotting import save
+    from signorini.studies.scene.store import read_quadrature_error
     from signorini.studies.theory.figures import extra_figure, rate_figure
 
     errors = pd.read_csv(errors_csv)
@@ -213,7 +243,13 @@ def report_stage(
     rates = rate_rows(errors)
     atomic_write_text(outs["csv"], table.to_csv(index=False, float_format="%.6e"))
     true_table2 = table2_rows(errors, [true_name(n) for n in TABLE2_NORMS])
-    atomic_write_text(outs["md"], findings(table, rates, table2_rows(errors), true_table2))
+    accuracy = [
+        {"norm": name, "N": int(N), "value": errors.set_index("N").loc[N, name],
+         "quadrature_error": read_quadrature_error(path, name, int(N))}
+        for name, paths in (true_norm_jsons or {}).items()
+        for N, path in zip(errors["N"], paths, strict=True)
+    ]
+    atomic_write_text(outs["md"], findings(table, rates, table2_rows(errors), true_table2, accuracy))
     ax = rate_figure(rates)
     ax.figure.tight_layout()
     save(ax.figure, outs["rates_pdf"], outs["rates_png"])
