@@ -95,9 +95,9 @@ def _direct(path: Path, src: Path, digest: str) -> frozenset[Path]:
 
 class ImportCache:
     """The direct imports of files, kept in a JSON file between processes: an entry holds only
-    while the file's content has the recorded digest.  A missing or damaged
-    cache file is an empty cache; ``save`` replaces it atomically (concurrent processes: the last
-    one wins, each with valid entries)."""
+    while the file's content has the recorded digest.  A missing or damaged cache file is an empty
+    cache; ``save`` replaces it atomically (concurrent processes: the last one wins, each with
+    valid entries)."""
 
     def __init__(self, path: str | os.PathLike) -> None:
         self.path = Path(path)
@@ -123,6 +123,7 @@ class ImportCache:
         """Write the cache if it gained entries (best effort: a read-only directory keeps none)."""
         if not self._changed:
             return
+        tmp = None
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(dir=self.path.parent, prefix=f".{self.path.name}.", suffix=".tmp")
@@ -131,7 +132,8 @@ class ImportCache:
             os.replace(tmp, self.path)
             self._changed = False
         except OSError:
-            pass
+            if tmp is not None and os.path.exists(tmp):
+                os.remove(tmp)
 
 
 def import_closure(
