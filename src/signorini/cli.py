@@ -70,7 +70,7 @@ def solve_command(args: argparse.Namespace) -> int:
         norms = ", ".join(f"{name} {value:.6e}" for name, value in values.items())
         print(f"‖u − u_h‖: {norms} ({time.perf_counter() - t3:.2f} s)")
     if args.vtk:
-        from signorini.export import solution_fields, write_vtu
+        from signorini.vtu import solution_fields, write_vtu
 
         write_vtu(args.vtk, disc.mesh, solution_fields(problem, disc.mesh, result.u, result.lam, result.active))
         print(f"wrote {args.vtk}")

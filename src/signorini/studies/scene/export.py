@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import os
 
-from signorini.export import solution_fields, write_vtu
 from signorini.studies.scene.store import SceneMesh
+from signorini.vtu import solution_fields, write_vtu
 
 
 def vtk_stage(at: SceneMesh, solution_npz: str | os.PathLike, out_vtu: str | os.PathLike) -> None:
