@@ -132,6 +132,107 @@ def cold_solve(N: int, diagonal: str, timeout: float) -> dict | None:
         proc.join()
 
 
+def _assemble(out: dict, N: int, diagonal: str, problem: Problem) -> DiscreteProblem:
+    """Mesh and assembly, timed as the pipeline assembles (discrete.build): A with a degree-2
+    basis, b over chunks of triangles with the 16-point rule (a whole-mesh degree-8 basis alone is
+    ~11 GB at N = 2001)."""
+    mesh, out["mesh_s"] = timed(friedrichs_keller, N, diagonal)
+    basis, out["basis_s"] = timed(p1_basis, mesh, 2)
+    A, out["matrix_assembly_s"] = timed(system_matrix, basis, problem.c)
+    del basis
+    b, out["rhs_assembly_s"] = timed(load_vector, mesh, problem)
+    out["rss_after_mib"]["assembly"] = peak_rss_mib()
+    log.info("N=%d: assembly done (b in %.2f s)", N, out["rhs_assembly_s"])
+    # the object the solver route takes, from the very arrays timed above (no second copy)
+    return DiscreteProblem(problem, N, diagonal, mesh, A, b, boundary_nodes(mesh))
+
+
+def _factorize(out: dict, A) -> None:
+    """One sparse Cholesky factorisation of A, best of 2."""
+    times = [timed(factorize, A)[1] for _ in range(2)]
+    out["factorization_s"] = min(times)
+    out["factorization_runs_s"] = times
+    out["rss_after_mib"]["factorization"] = peak_rss_mib()
+    log.info("factorization: %.2f s (%s)", out["factorization_s"], out["factorization_backend"])
+
+
+def _cascade_solve(out: dict, disc: DiscreteProblem, repeats: int):
+    """The exact solve with the cascade warm start, median of ``repeats``."""
+    runs = [timed(solve_discrete, disc) for _ in range(repeats)]
+    res = runs[0][0]
+    out["active_set_runs_s"] = [seconds for _, seconds in runs]
+    out["active_set_solve_s"] = float(np.median(out["active_set_runs_s"]))
+    out["active_set_iterations"] = int(res.iterations)
+    out["active_set_fine_level_s"] = float(res.wall_time_s)
+    out["active_set_info"] = dict(res.info)  # Python ints and the backend name
+    out["active_set_factorizations"] = int(res.info.get("factorizations", -1))
+    out["active_set_triangular_solves"] = int(res.info.get("triangular_solves", -1))
+    out["active_set_certificate"] = res.certificate.as_dict()
+    out["n_active"] = int(res.active.size)
+    out["rss_after_mib"]["active_set"] = peak_rss_mib()
+    log.info("active set (cascade): %.2f s, %d iterations, %s", out["active_set_solve_s"], res.iterations, res.info)
+    return res
+
+
+def _norms(out: dict, disc: DiscreteProblem, u: np.ndarray) -> None:
+    t0 = time.perf_counter()
+    out["norms"] = evaluate_norms(disc.problem, disc.mesh, u, NORMS)  # what the pipeline's norm jobs run
+    out["norms_s"] = time.perf_counter() - t0
+    out["rss_after_mib"]["norms"] = peak_rss_mib()
+    log.info("norms: %.2f s", out["norms_s"])
+
+
+def _cold_start(out: dict, N: int, diagonal: str, timeout: float, u: np.ndarray) -> None:
+    """The cold start, in a child process with a time limit."""
+    cold = cold_solve(N, diagonal, timeout)
+    if cold is None:
+        out["active_set_cold_s"] = None
+        out["active_set_cold_timed_out_after_s"] = timeout
+        log.info("cold start: exceeded %.0f s", timeout)
+        return
+    out["active_set_cold_s"] = cold["seconds"]
+    out["active_set_cold_iterations"] = int(cold["iterations"])
+    out["active_set_cold_info"] = dict(cold["info"])
+    out["active_set_cold_max_diff"] = float(np.abs(cold["u"] - u).max() / np.abs(u).max())
+    log.info("cold start: %.2f s, %s", cold["seconds"], cold["info"])
+
+
+def _clarabel(out: dict, disc: DiscreteProblem, runs: int, u: np.ndarray) -> None:
+    """The same QP through cvxpy / CLARABEL, median of ``runs``; a failure is recorded."""
+    try:
+        clarabel = functools.partial(cvxpy_solve, disc.A, disc.b, disc.boundary, solver="CLARABEL", check=False)
+        clar_runs = [timed(clarabel) for _ in range(runs)]
+        clar = clar_runs[-1][0]
+        out["cvxpy_clarabel_runs_s"] = [seconds for _, seconds in clar_runs]
+        out["cvxpy_clarabel_s"] = float(np.median(out["cvxpy_clarabel_runs_s"]))
+        del clar_runs
+        out["cvxpy_clarabel_solver_time_s"] = clar.info.get("solve_time_s")
+        out["cvxpy_clarabel_iterations"] = int(clar.iterations)
+        out["cvxpy_clarabel_certificate"] = clar.certificate.as_dict()
+        diff = np.abs(clar.u - u)
+        out["cvxpy_clarabel_max_diff_abs"] = float(diff.max())
+        out["cvxpy_clarabel_max_diff_rel"] = float(diff.max() / np.abs(u).max())
+        log.info("CLARABEL: %.2f s, rel. max diff %.2e", out["cvxpy_clarabel_s"], out["cvxpy_clarabel_max_diff_rel"])
+    except Exception as err:  # record, do not lose the other numbers
+        out["cvxpy_clarabel_s"] = None
+        out["cvxpy_clarabel_error"] = f"{type(err).__name__}: {err}"
+        log.error("CLARABEL failed: %s", out["cvxpy_clarabel_error"])
+    out["rss_after_mib"]["cvxpy_clarabel"] = peak_rss_mib()
+
+
+def _ratios(out: dict) -> None:
+    """The ratios against the project's targets."""
+    fact, solve_s, clar_s = out["factorization_s"], out["active_set_solve_s"], out.get("cvxpy_clarabel_s")
+    out["active_set_over_factorization"] = solve_s / fact
+    out["clarabel_over_active_set"] = clar_s / solve_s if clar_s else None
+    out["rhs_plus_norms_s"] = out["rhs_assembly_s"] + out.get("norms_s", np.nan)
+    out["meets_targets"] = {
+        "active_set_le_3x_factorization": out["active_set_over_factorization"] <= 3.0,
+        "clarabel_ge_20x_active_set": None if clar_s is None else out["clarabel_over_active_set"] >= 20.0,
+        "rhs_plus_norms_le_10s": bool(out["rhs_plus_norms_s"] <= 10.0),
+    }
+
+
 def run(args: argparse.Namespace) -> dict:
     N, diagonal = args.N, args.diagonal
     problem = Problem()
@@ -147,111 +248,22 @@ def run(args: argparse.Namespace) -> dict:
         "targets": TARGETS,
         "rss_after_mib": {},
     }
-    stage_rss = out["rss_after_mib"]
-
-    # --- mesh and assembly ---------------------------------------------------------
-    # as the pipeline assembles (discrete.build): A with a degree-2 basis, b over chunks of
-    # triangles with the 16-point rule (a whole-mesh degree-8 basis alone is ~11 GB at N = 2001)
-    mesh, out["mesh_s"] = timed(friedrichs_keller, N, diagonal)
-    basis, out["basis_s"] = timed(p1_basis, mesh, 2)
-    A, out["matrix_assembly_s"] = timed(system_matrix, basis, problem.c)
-    del basis
-    b, out["rhs_assembly_s"] = timed(load_vector, mesh, problem)
-    stage_rss["assembly"] = peak_rss_mib()
-    log.info("N=%d: assembly done (b in %.2f s)", N, out["rhs_assembly_s"])
-    B = boundary_nodes(mesh)
-    # the object the solver route takes, from the very arrays timed above (no second copy)
-    disc = DiscreteProblem(problem, N, diagonal, mesh, A, b, B)
-
-    # --- one sparse Cholesky factorisation of A, best of 2 ---------------------------
+    disc = _assemble(out, N, diagonal, problem)
     if not args.memory_only:
-        times = []
-        for _ in range(2):
-            _, seconds = timed(factorize, A)
-            times.append(seconds)
-        out["factorization_s"] = min(times)
-        out["factorization_runs_s"] = times
-        stage_rss["factorization"] = peak_rss_mib()
-        log.info("factorization: %.2f s (%s)", out["factorization_s"], out["factorization_backend"])
-
-    # --- the exact solve with the cascade warm start, median of 3 ---------------------
-    runs = [timed(solve_discrete, disc) for _ in range(1 if args.memory_only else 3)]
-    res = runs[0][0]
-    out["active_set_runs_s"] = [seconds for _, seconds in runs]
-    out["active_set_solve_s"] = float(np.median(out["active_set_runs_s"]))
-    out["active_set_iterations"] = int(res.iterations)
-    out["active_set_fine_level_s"] = float(res.wall_time_s)
-    out["active_set_info"] = dict(res.info)  # Python ints and the backend name
-    out["active_set_factorizations"] = int(res.info.get("factorizations", -1))
-    out["active_set_triangular_solves"] = int(res.info.get("triangular_solves", -1))
-    out["active_set_certificate"] = res.certificate.as_dict()
-    out["n_active"] = int(res.active.size)
-    stage_rss["active_set"] = peak_rss_mib()
-    log.info("active set (cascade): %.2f s, %d iterations, %s", out["active_set_solve_s"], res.iterations, res.info)
-
-    # --- norms -------------------------------------------------------------------------
+        _factorize(out, disc.A)
+    res = _cascade_solve(out, disc, 1 if args.memory_only else 3)
     if not args.no_norms:
-        t0 = time.perf_counter()
-        norms = evaluate_norms(problem, mesh, res.u, NORMS)  # what the pipeline's norm jobs run
-        out["norms_s"] = time.perf_counter() - t0
-        out["norms"] = norms
-        stage_rss["norms"] = peak_rss_mib()
-        log.info("norms: %.2f s", out["norms_s"])
-
+        _norms(out, disc, res.u)
     if not args.memory_only:
-        # --- cold start, in a child process with a time limit --------------------------
         if args.skip_cold:
             out["active_set_cold_s"] = None
         else:
-            cold = cold_solve(N, diagonal, args.cold_timeout)
-            if cold is None:
-                out["active_set_cold_s"] = None
-                out["active_set_cold_timed_out_after_s"] = args.cold_timeout
-                log.info("cold start: exceeded %.0f s", args.cold_timeout)
-            else:
-                out["active_set_cold_s"] = cold["seconds"]
-                out["active_set_cold_iterations"] = int(cold["iterations"])
-                out["active_set_cold_info"] = dict(cold["info"])
-                out["active_set_cold_max_diff"] = float(np.abs(cold["u"] - res.u).max() / np.abs(res.u).max())
-                log.info("cold start: %.2f s, %s", cold["seconds"], cold["info"])
-
-        # --- the same QP through cvxpy / CLARABEL ----------------------------------------
+            _cold_start(out, N, diagonal, args.cold_timeout, res.u)
         if args.skip_cvxpy:
             out["cvxpy_clarabel_s"] = None
         else:
-            try:
-                clarabel = functools.partial(cvxpy_solve, A, b, B, solver="CLARABEL", check=False)
-                clar_runs = [timed(clarabel) for _ in range(args.clarabel_runs)]
-                clar = clar_runs[-1][0]
-                out["cvxpy_clarabel_runs_s"] = [seconds for _, seconds in clar_runs]
-                out["cvxpy_clarabel_s"] = float(np.median(out["cvxpy_clarabel_runs_s"]))
-                del clar_runs
-                out["cvxpy_clarabel_solver_time_s"] = clar.info.get("solve_time_s")
-                out["cvxpy_clarabel_iterations"] = int(clar.iterations)
-                out["cvxpy_clarabel_certificate"] = clar.certificate.as_dict()
-                diff = np.abs(clar.u - res.u)
-                out["cvxpy_clarabel_max_diff_abs"] = float(diff.max())
-                out["cvxpy_clarabel_max_diff_rel"] = float(diff.max() / np.abs(res.u).max())
-                rel = out["cvxpy_clarabel_max_diff_rel"]
-                log.info("CLARABEL: %.2f s, rel. max diff %.2e", out["cvxpy_clarabel_s"], rel)
-                del clar
-            except Exception as err:  # record, do not lose the other numbers
-                out["cvxpy_clarabel_s"] = None
-                out["cvxpy_clarabel_error"] = f"{type(err).__name__}: {err}"
-                log.error("CLARABEL failed: %s", out["cvxpy_clarabel_error"])
-            stage_rss["cvxpy_clarabel"] = peak_rss_mib()
-
-        # --- ratios against the project's targets -----------------------------------------
-        fact, solve_s, clar_s = out["factorization_s"], out["active_set_solve_s"], out.get("cvxpy_clarabel_s")
-        out["active_set_over_factorization"] = solve_s / fact
-        out["clarabel_over_active_set"] = clar_s / solve_s if clar_s else None
-        out["rhs_plus_norms_s"] = out["rhs_assembly_s"] + out.get("norms_s", np.nan)
-        out["meets_targets"] = {
-            "active_set_le_3x_factorization": out["active_set_over_factorization"] <= 3.0,
-            "clarabel_ge_20x_active_set": None if clar_s is None else out["clarabel_over_active_set"] >= 20.0,
-            "rhs_plus_norms_le_10s": bool(out["rhs_plus_norms_s"] <= 10.0),
-        }
-
+            _clarabel(out, disc, args.clarabel_runs, res.u)
+        _ratios(out)
     out["machine"]["load_average_at_end"] = list(os.getloadavg())  # others' jobs inflate the timings
     out["peak_rss_mib"] = peak_rss_mib()
     out["peak_rss_gib"] = out["peak_rss_mib"] / 1024.0
