@@ -10,11 +10,16 @@ import os
 import time
 from collections.abc import Mapping
 from dataclasses import replace
+from typing import TYPE_CHECKING
 
 from signorini.fem.norm_names import parse_norm_name
 from signorini.fem.norms import Conventions, evaluate_norms
 from signorini.pipeline.artifacts import save_json
 from signorini.studies.scene.store import SceneMesh
+
+if TYPE_CHECKING:
+    import numpy as np
+    from skfem import MeshTri
 
 log = logging.getLogger(__name__)
 TIMINGS_NOTE = "perf_counter timers inside the job: mesh = building the mesh, norm = error evaluation + reduction"
@@ -36,7 +41,7 @@ def uncertainty_norm(norm: str) -> str:
     return spec.base.removesuffix(spec.part) if spec.part else spec.base
 
 
-def algebraic_uncertainty(at: SceneMesh, mesh, delta, norm: str, conv: Conventions) -> dict:
+def algebraic_uncertainty(at: SceneMesh, mesh: MeshTri, delta: np.ndarray, norm: str, conv: Conventions) -> dict:
     """The norm of the algebraic error ``δ`` (a P1 function: the error of ``-δ`` against ``u ≡ 0``)
     that bounds how far round-off can move the value of ``norm``, and the uncertainty recorded."""
     zero = replace(at.problem, A=0.0)  # u ≡ 0, same free point: the same boundary pieces
