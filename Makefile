@@ -16,7 +16,7 @@ FIND_UV = uv="$(UV)"; if [ -z "$$uv" ]; then \
 	[ -x .tools/bin/uv ] || { "$(PYTHON)" -m venv .tools && .tools/bin/pip install --quiet uv==$(UV_VERSION); } || exit 1; \
 	uv=.tools/bin/uv; fi
 
-.PHONY: setup setup-peers all test lock lint dag bench report clean-corrupt clean-results
+.PHONY: setup setup-peers all check test lock lint dag bench report clean-corrupt clean-results
 
 ## setup: create .venv with uv from the hash-pinned environment.lock and install the package (editable)
 setup: $(STAMP)
@@ -36,6 +36,10 @@ setup-peers:
 ## all: set up, then run the whole pipeline (paper scene -> paper_figures/)
 all: setup
 	$(BIN)/snakemake -c$(CORES) all
+
+## check: compare paper_figures/ of your run with the committed files (git HEAD): per file identical, or how far its numbers differ
+check: setup
+	$(BIN)/python -m signorini.pipeline.check
 
 ## test: set up, then run the test suite (what .ci/run calls)
 test: setup

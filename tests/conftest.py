@@ -169,6 +169,6 @@ def built_repo(tmp_path_factory):
     config["figures_scene"] = "smoke"
     path.write_text(yaml.safe_dump(config, sort_keys=False))
     t0 = time.perf_counter()
-    snakemake(repo, "-c2", *BUILT_TARGETS)
+    snakemake(repo, "-c2", *BUILT_TARGETS, timeout=3600)  # a loaded 2-core machine needs more than 10 min
     print(f"built repository copy: {time.perf_counter() - t0:.1f} s")
     return repo

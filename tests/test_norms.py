@@ -509,3 +509,44 @@ def test_every_norm_scales_with_the_amplitude(amplitude):
         values[A] = evaluate_norms(disc.problem, disc.mesh, solve_discrete(disc).u, names, chunk=200)
     for name in names:
         assert values[amplitude][name] / amplitude == pytest.approx(values[1.0][name], rel=1e-12), name
+
+
+NAMES_OF_THE_GRAMMAR = ["L2", "L4", "L16", "Linf", "L4plus", "Linfminus", "W14", "W116", "W1inf", "H1", "H12"]
+
+
+@pytest.mark.parametrize("name", NAMES_OF_THE_GRAMMAR)
+def test_a_perturbation_of_u_h_moves_each_norm_by_at_most_its_uncertainty_norm(name):
+    """What the tables' digits rest on: ``|‖u − (u_h + δ)‖ − ‖u − u_h‖| ≤ ‖δ‖`` for the discrete norm
+    (``studies.scene.norm.uncertainty_norm``: the two-sided norm for a one-sided one), also for
+    the geometric-mean ``H^{1/2}`` estimate, for random and for worst-sign perturbations."""
+    from dataclasses import replace
+
+    from signorini.fem.norms import evaluate_norms
+    from signorini.fem.problem import Problem
+    from signorini.studies.scene.norm import uncertainty_norm
+
+    problem, N = Problem(), 16
+    mesh = friedrichs_keller(N)
+    u_h = problem.u(mesh.p) * 0.97
+    base = evaluate_norms(problem, mesh, u_h, [name])[name]
+    rng = np.random.default_rng(11)
+    other = uncertainty_norm(name)
+    for scale in (1e-3, 1e-9):
+        for delta in (rng.uniform(-1, 1, u_h.size), -np.sign(problem.u(mesh.p) - u_h + 1e-300)):
+            delta = scale * np.abs(u_h).max() * delta
+            moved = evaluate_norms(problem, mesh, u_h + delta, [name])[name]
+            bound = evaluate_norms(replace(problem, A=0.0), mesh, -delta, [other])[other]
+            assert abs(moved - base) <= bound * (1 + 1e-12) + 1e-15 * base
+
+
+def test_uncertainty_norm_names():
+    from signorini.studies.scene.norm import uncertainty_norm
+
+    assert [uncertainty_norm(n) for n in ("L4", "L4plus", "Linfminus", "W14_true", "H12_true", "L4plus_true")] == [
+        "L4",
+        "L4",
+        "Linf",
+        "W14",
+        "H12",
+        "L4",
+    ]

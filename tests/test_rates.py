@@ -105,3 +105,22 @@ def test_second_case_eocs_on_its_finest_meshes_match_the_theory(built_repo):
     for norm, (rate, tol) in CASE2_THEORY.items():
         for name in (norm, norm + "_true"):
             assert np.all(np.abs(finest[name].to_numpy() - rate) <= tol), (name, finest[name].tolist())
+
+
+def test_eoc_and_regression_uncertainties_bound_the_change_of_perturbed_errors():
+    """Errors moved by at most ``de`` move each EOC and the regression slope by at most the
+    propagated uncertainty (first order; the bound is attained by alternating signs)."""
+    from signorini.fem.convergence import eoc_uncertainty, regression_uncertainty
+
+    h = 1.0 / np.array([101.0, 201.0, 301.0, 401.0, 501.0])
+    e = 0.3 * h**2 * (1 + 0.1 * h)
+    de = 1e-9 * e
+    du, dr = eoc_uncertainty(h, e, de), regression_uncertainty(h, e, de)
+    assert np.isnan(du[0]) and np.all(du[1:] > 0) and dr > 0
+    rng = np.random.default_rng(3)
+    for signs in [np.array([1, -1, 1, -1, 1.0]), *rng.choice([-1.0, 1.0], size=(20, 5))]:
+        moved = e + signs * de
+        assert np.all(np.abs(eoc(h, moved)[1:] - eoc(h, e)[1:]) <= du[1:] * (1 + 1e-6))
+        assert abs(regression_slope(h, moved) - regression_slope(h, e)) <= dr * (1 + 1e-6)
+    alternating = e + np.array([1, -1, 1, -1, 1.0]) * de
+    assert np.abs(eoc(h, alternating)[1:] - eoc(h, e)[1:]) == pytest.approx(du[1:], rel=1e-5)

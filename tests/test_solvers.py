@@ -535,3 +535,24 @@ def test_a_cascade_start_that_does_not_settle_falls_back_to_the_cold_start(caplo
     assert "cascade start did not settle" in caplog.text
     cold = solve_discrete(disc, warm_start=None)
     assert np.array_equal(result.u, cold.u) and result.certificate.ok
+
+
+def test_linearised_error_recovers_a_planted_algebraic_error(small_case):
+    """``u = u* + δ`` with δ on the free nodes: ``linearised_error`` returns δ and its energy
+    ``(δᵀAδ)^{1/2}``; the exact solution itself has an algebraic error at round-off."""
+    from signorini.solvers.certificate import linearised_error
+
+    disc, res = small_case
+    A, b, B = disc.A, disc.b, disc.boundary
+    free = np.setdiff1d(np.arange(b.size), B)  # interior nodes: u_B and the contact set unchanged
+    delta = np.zeros_like(res.u)
+    delta[free] = 1e-6 * np.abs(res.u).max() * np.random.default_rng(5).uniform(-1.0, 1.0, free.size)
+    lam = res.lam + np.where(np.isin(B, res.active), (A @ delta)[B], 0.0)  # λ absorbs the contact rows only
+    got = linearised_error(A, b, B, res.u + delta, lam, res.active)
+    assert np.abs(got.delta - delta).max() <= 1e-6 * np.abs(delta).max()
+    assert got.energy == pytest.approx(np.sqrt(delta @ (A @ delta)), rel=1e-6)
+    exact = linearised_error(A, b, B, res.u, res.lam, res.active)
+    assert np.abs(exact.delta).max() <= 1e-12 * np.abs(res.u).max()
+    assert np.all(exact.delta[res.active] == 0.0)
+    summary = exact.summary(res.u)
+    assert set(summary) == {"energy", "max", "relative_max"} and summary["relative_max"] < 1e-12

@@ -1,4 +1,12 @@
-"""Number and table formatting of the rendered outputs (Markdown, LaTeX, CSV)."""
+"""Number and table formatting of the rendered outputs (Markdown, LaTeX, CSV).
+
+Digits of a computed value.  A value ``v`` known up to an uncertainty ``δ`` (how far round-off in
+the discrete solution can move it: ``studies.scene.norm.algebraic_uncertainty``) is written with
+``certified_digits(v, δ)`` significant digits, the count whose last unit is not below ``δ``,
+at most the paper's five; an order of convergence with ``certified_decimals(δ)`` decimals, at
+most the paper's four.  Every format (CSV, Markdown, LaTeX, the figures) writes the same rounded
+value (``round_sig``), so the outputs do not depend on the processor's round-off.
+"""
 
 from __future__ import annotations
 
@@ -6,6 +14,38 @@ import math
 from collections.abc import Sequence
 
 _SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+SIG_DIGITS = 5  # the paper's precision of an error: 5.8699·10⁻⁴
+EOC_DECIMALS = 4  # ... and of an order of convergence: 1.9968
+
+
+def certified_digits(value: float, uncertainty: float, cap: int = SIG_DIGITS) -> int:
+    """Significant digits of ``value`` whose unit is at least ``uncertainty``,
+    ``⌊log10(|value| / uncertainty)⌋``, clipped to ``[1, cap]`` (``cap`` when nothing is uncertain)."""
+    if not (math.isfinite(value) and value != 0.0):
+        return cap
+    if not uncertainty > 0.0:
+        return cap if uncertainty == 0.0 else 1  # NaN: nothing is certified
+    return max(1, min(cap, math.floor(math.log10(abs(value) / uncertainty))))
+
+
+def certified_decimals(uncertainty: float, cap: int = EOC_DECIMALS) -> int:
+    """Decimals of a quantity of order one known to ``± uncertainty``: ``⌊−log10 uncertainty⌋``
+    clipped to ``[0, cap]``."""
+    if not uncertainty > 0.0:
+        return cap if uncertainty == 0.0 else 0
+    return max(0, min(cap, math.floor(-math.log10(uncertainty))))
+
+
+def round_sig(x: float, digits: int) -> float:
+    """``x`` rounded to ``digits`` significant digits (correctly rounded decimal, as printed)."""
+    return float(f"{x:.{digits - 1}e}") if math.isfinite(x) else x
+
+
+def sig_csv(x: float, digits: int) -> str:
+    """``x`` with ``digits`` significant digits for a CSV cell: ``5.8746e-04``."""
+    return f"{x:.{digits - 1}e}"
 
 
 def h_label(N: int | str) -> str:

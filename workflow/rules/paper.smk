@@ -44,6 +44,7 @@ rule table2:
     """Table 2: the EOCs, the regression slope and the expected orders."""
     input:
         eoc=expand(rules.eoc.output.csv, scene=FIG),
+        norms=flat(norm_jsons(FIG, TABLE2_NORMS)),
         code=code("table2"),
     output:
         **reported(FIGURES["table2"], "table2", "Paper", "Tables"),
@@ -54,6 +55,7 @@ rule table2:
         "../envs/signorini.yaml"
     params:
         N=scene_of(FIG)["N"],
+        norm_jsons=norm_jsons(FIG, TABLE2_NORMS),
     script:
         "../scripts/table2.py"
 

@@ -6,4 +6,5 @@ from signorini.studies.paper.tables import table2_stage
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake):
-    table2_stage(snakemake.input.eoc[0], snakemake.params.N, snakemake.output)
+    p = snakemake.params
+    table2_stage(snakemake.input.eoc[0], p.N, p.norm_jsons, snakemake.output)

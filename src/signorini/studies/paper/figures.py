@@ -3,6 +3,10 @@ the stages ``figure2`` and ``figure3`` save them.
 
 ``figure2`` plots the sampled ``u`` and ``f`` (the ``sample`` stage's artifact), ``figure3`` the
 ``L⁴`` and ``W^{1,4}`` errors against ``h`` with reference slopes of the expected orders.
+
+The stages draw rounded data, so that round-off of another processor cannot move a single
+coordinate in the PDF: Figure 3 the errors as Table 1 prints them (``tables.certified_errors``),
+Figure 2 the sampled fields to ``FIELD_DIGITS`` significant digits.
 """
 
 from __future__ import annotations
@@ -14,6 +18,7 @@ from signorini.paper import FIGURE3_NORMS, error_label_tex, expected_rate
 from signorini.plotting import new_figure, save
 
 MARKERS = {"L4": "o", "W14": "s"}
+FIELD_DIGITS = 10  # u and f are exact functions: the libm's last bits are all that can differ
 
 
 def figure2(fields: Mapping, fig=None):
@@ -60,11 +65,22 @@ def figure3(errors, ax=None, norms: Sequence[str] = FIGURE3_NORMS):
     return ax
 
 
+def rounded_fields(fields: Mapping, digits: int = FIELD_DIGITS) -> dict:
+    """The sampled arrays rounded to ``digits`` significant digits (decimal rounding, as printed)."""
+    import numpy as np
+
+    def rnd(a):
+        a = np.asarray(a, dtype=float)
+        return np.array([float(f"{v:.{digits - 1}e}") for v in a.ravel()]).reshape(a.shape)
+
+    return {k: rnd(v) if np.asarray(v).dtype.kind == "f" else v for k, v in fields.items()}
+
+
 def figure2_stage(fields_npz: str | os.PathLike, out_pdf: str | os.PathLike, out_png: str | os.PathLike) -> None:
-    """Stage ``figure2``: Figure 2 from the sampled fields."""
+    """Stage ``figure2``: Figure 2 from the sampled fields (rounded: ``rounded_fields``)."""
     from signorini.pipeline.artifacts import load_npz
 
-    save(figure2(load_npz(fields_npz)), out_pdf, out_png)
+    save(figure2(rounded_fields(load_npz(fields_npz))), out_pdf, out_png)
 
 
 def figure3_stage(
@@ -73,9 +89,16 @@ def figure3_stage(
     out_pdf: str | os.PathLike,
     out_png: str | os.PathLike,
 ) -> None:
-    """Stage ``figure3``: Figure 3 from the norm artifacts of the rendered scene."""
-    from signorini.studies.scene.store import read_errors
+    """Stage ``figure3``: Figure 3 from the norm artifacts of the rendered scene, each error rounded
+    to the digits Table 1 prints."""
+    from signorini.studies.paper.tables import certified_errors
+    from signorini.studies.scene.store import read_errors, read_uncertainties
 
-    ax = figure3(read_errors(scene_N, norm_jsons))
+    errors = read_errors(scene_N, norm_jsons)
+    names = list(norm_jsons)
+    values, _ = certified_errors(errors, read_uncertainties(scene_N, norm_jsons), names)
+    for j, name in enumerate(names):
+        errors[name] = [row[j] for row in values]
+    ax = figure3(errors)
     ax.figure.tight_layout()
     save(ax.figure, out_pdf, out_png)

@@ -1,7 +1,10 @@
 """Stage ``solve``: solve (S_h) on the assembled system of one scene and ``N``, certified.
 
-Writes ``solution.npz`` (``u``, ``λ``, the contact set) and ``solution.json`` (the KKT
-certificate, iterations and timers).  A solution without a valid KKT certificate raises
+Writes ``solution.npz`` (``u``, ``λ``, the contact set and ``algebraic_error``, the first-order
+algebraic error ``δ ≈ u_h − u_h*`` of ``solvers.certificate.linearised_error``) and
+``solution.json`` (the KKT certificate, the size of ``δ``, iterations and timers).  The norm
+stage evaluates each norm of ``δ`` next to the error's: the digits of a reported value that
+round-off cannot change (``signorini.formatting.certified_digits``).  A solution without a valid KKT certificate raises
 ``KKTError`` (the residuals are in its message, hence in the job's log) and nothing is written.
 """
 
@@ -15,6 +18,7 @@ from collections.abc import Mapping
 from signorini.fem.discrete import DiscreteProblem
 from signorini.fem.solve import solve_discrete
 from signorini.pipeline.artifacts import save_json, save_npz
+from signorini.solvers.certificate import linearised_error
 from signorini.studies.scene.store import SceneMesh, load_system
 
 log = logging.getLogger(__name__)
@@ -37,13 +41,16 @@ def solve_stage(
     t1 = time.perf_counter()
     result = solve_discrete(disc, solver=solver, **dict(solver_options or {}))
     t2 = time.perf_counter()
+    algebraic = linearised_error(A, b, boundary, result.u, result.lam, result.active)
     log.info(
-        "N=%d solver=%s iterations=%d active=%d certificate: %s",
+        "N=%d solver=%s iterations=%d active=%d certificate: %s; algebraic error max |δ| = %.1e, energy %.1e",
         N,
         solver,
         result.iterations,
         result.active.size,
         result.certificate.describe(),
+        float(abs(algebraic.delta).max(initial=0.0)),
+        algebraic.energy,
     )
     info = {
         "N": N,
@@ -61,7 +68,16 @@ def solve_stage(
             "solve = solve_discrete incl. the warm-start cascade; summary.wall_time_s = final solver call only",
         },
         "summary": result.summary(),
+        "algebraic_error": algebraic.summary(result.u),
     }
-    save_npz(out_npz, u=result.u, lam=result.lam, active=result.active, N=N, diagonal=diagonal)
+    save_npz(
+        out_npz,
+        u=result.u,
+        lam=result.lam,
+        active=result.active,
+        algebraic_error=algebraic.delta,
+        N=N,
+        diagonal=diagonal,
+    )
     save_json(out_json, info)
     return info

@@ -96,6 +96,20 @@ def read_norm(path: str | os.PathLike, norm: str, N: int) -> float:
     return value
 
 
+def read_uncertainty(path: str | os.PathLike, norm: str, N: int) -> float:
+    """How far round-off in ``u_h`` can move the value of one norm artifact (its
+    ``algebraic_error.uncertainty``, ``studies.scene.norm.algebraic_uncertainty``), checked."""
+    read_norm(path, norm, N)
+    record = load_json(path).get("algebraic_error")
+    value = float(record.get("uncertainty", np.nan)) if isinstance(record, dict) else np.nan
+    if not np.isfinite(value) or value < 0.0:
+        raise CorruptArtifactError(
+            f"{path}: {norm} at N={N} records no algebraic-error uncertainty (written before it was "
+            "recorded? delete the artifact or rerun its solve job)"
+        )
+    return value
+
+
 def read_quadrature_error(path: str | os.PathLike, norm: str, N: int) -> dict:
     """The recorded accuracy of a ``_true`` norm artifact (``error_estimate``, ``rtol``, ``converged``,
     ``levels``), checked to hold ``norm`` at ``N``."""
@@ -118,6 +132,16 @@ def read_errors(scene_N: Sequence[int], norm_jsons: Mapping[str, Sequence[str | 
             raise ValueError(f"norm {name}: {len(paths)} artifacts for {len(Ns)} meshes")
         data[name] = [read_norm(path, name, N) for N, path in zip(Ns, paths, strict=True)]
     return pd.DataFrame(data)
+
+
+def read_uncertainties(
+    scene_N: Sequence[int], norm_jsons: Mapping[str, Sequence[str | os.PathLike]]
+) -> pd.DataFrame:
+    """``read_errors``' frame with each value replaced by its uncertainty (``read_uncertainty``)."""
+    frame = read_errors(scene_N, norm_jsons)
+    for name, paths in norm_jsons.items():
+        frame[name] = [read_uncertainty(path, name, N) for N, path in zip(frame["N"], paths, strict=True)]
+    return frame
 
 
 def read_errors_csv(path: str | os.PathLike) -> pd.DataFrame:
