@@ -11,11 +11,12 @@ import os
 from collections.abc import Mapping, Sequence
 
 from signorini.paper import FIGURE3_NORMS, error_label_tex, expected_rate
-from signorini.plotting import new_figure, save
+from signorini.plotting import new_figure, save, style, styled
 
 MARKERS = {"L4": "o", "W14": "s"}
 
 
+@styled
 def figure2(fields: Mapping, fig=None):
     """Surface plots of ``u`` (left) and ``f`` (right) on the unit square, like the paper's Fig. 2.
 
@@ -38,6 +39,7 @@ def figure2(fields: Mapping, fig=None):
     return fig
 
 
+@styled
 def figure3(errors, ax=None, norms: Sequence[str] = FIGURE3_NORMS):
     """The errors in ``norms`` (the paper's ``L⁴`` and ``W^{1,4}``) against ``h``, double-logarithmic,
     each with a reference line ``h^r`` of its expected order ``r`` through the coarsest point,
@@ -77,5 +79,6 @@ def figure3_stage(
     from signorini.studies.scene.store import read_errors
 
     ax = figure3(read_errors(scene_N, norm_jsons))
-    ax.figure.tight_layout()
+    with style():  # the layout measures the tick labels: in the style they are drawn in
+        ax.figure.tight_layout()
     save(ax.figure, out_pdf, out_png)
