@@ -40,6 +40,7 @@ h1 { font-size: 1.5em; } h2 { font-size: 1.25em; margin-top: 1.4em; } h3 { font-
 table { border-collapse: collapse; margin: 0.8em 0; font-variant-numeric: tabular-nums; }
 th, td { border: 1px solid #c8c8c8; padding: 0.25em 0.6em; }
 th { background: #f0f0f0; } tr:nth-child(even) td { background: #fafafa; }
+td:first-child, th:first-child { white-space: nowrap; }
 code { background: #f3f3f3; padding: 0 0.2em; border-radius: 3px; font-size: 0.95em; }
 """
 
