@@ -134,9 +134,9 @@ def _evidence(target: str, config: Mapping) -> list[str]:
         from signorini.studies.stability.atlas import case_artifacts
 
         return case_artifacts(config, "stability", paths.PATHS["atlas_case_json"])
-    # work precision: each mesh's measurements (the configurations depend on the installed solvers)
-    return [os.path.dirname(paths.PATHS["wp_measure_json"].format(scene="work_precision", N=N, solver="x"))
-            for N in scenes["work_precision"]["N"]]
+    # work precision: measurements on each mesh (its configurations depend on the installed solvers)
+    measured = paths.PATHS["wp_measure_json"].replace("{solver}", "*")
+    return [measured.format(scene="work_precision", N=N) for N in scenes["work_precision"]["N"]]
 
 
 @dataclass
@@ -161,7 +161,8 @@ class Study:
 
 
 def _exists(root: Path, files: Sequence[str]) -> bool:
-    return all((root / f).exists() for f in files)
+    """Every file exists (a pattern with ``*``: at least one file matches it)."""
+    return all(any(root.glob(f)) if "*" in f else (root / f).exists() for f in files)
 
 
 def plan(root: str | os.PathLike = ".", config: Mapping | None = None) -> list[Study]:
