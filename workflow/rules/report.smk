@@ -3,8 +3,6 @@
 # files it offers only as downloads). A page renders the file as it is: its source is a parameter
 # with its digest (an edited source reruns the page), not an input, so that rendering the
 # committed findings of a study never recomputes the study. Not part of any study's target.
-import logging
-
 from signorini.pipeline import report as report_lib
 
 # page: (caption in workflow/report/, category, subcategory), as the rule that writes its source
@@ -80,12 +78,6 @@ rule report_scene:
         "../scripts/report_page.py"
 
 
-def report_contents():
-    """The contents page's Markdown: the state of every study now (report_lib.plan)."""
-    studies = report_lib.plan(".", config)
-    return report_lib.contents_markdown(studies, report_lib.built_scenes(".", config))
-
-
 rule report_contents:
     """The report's contents: per study, built here, committed or missing."""
     input:
@@ -104,20 +96,12 @@ rule report_contents:
         "../envs/signorini.yaml"
     params:
         # the text itself: a change of state reruns the page
-        page=lambda wc: {"text": report_contents(), "title": "contents"},
+        page=lambda wc: {"text": report_lib.contents_text(config), "title": "contents"},
     script:
         "../scripts/report_page.py"
 
 
-class _NoMissingMetadata(logging.Filter):
-    """Snakemake's report warns once per output of every job in the targets' DAG that no job of
-    this checkout wrote (hundreds after a fresh clone: the committed files and the measurements
-    never made here); `make report` states per study instead whether it was built here.
-    """
-
-    def filter(self, record):
-        return "Missing metadata for file" not in str(record.getMessage())
-
-
+# Snakemake's report warns once per output in the DAG that no job of this checkout wrote
+# (hundreds after a fresh clone); the contents page and `make report` say it per study instead
 if "--report" in sys.argv:
-    logging.getLogger("snakemake.logging").addFilter(_NoMissingMetadata())
+    report_lib.hide_missing_metadata_warnings()

@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import hashlib
 import html
+import logging
 import os
 import sys
 from collections.abc import Mapping, Sequence
@@ -88,6 +89,23 @@ def contents_markdown(studies: Sequence[Study], scenes: Sequence[str]) -> str:
     lines += [f"- {s.status}" for s in studies]
     lines.append(f"- scenes with their errors and EOCs: {', '.join(scenes) if scenes else 'none built'}")
     return "\n".join(lines) + "\n"
+
+
+def contents_text(config: Mapping, root: str | os.PathLike = ".") -> str:
+    """The contents page's Markdown for the state of ``root`` now."""
+    return contents_markdown(plan(root, config), built_scenes(root, config))
+
+
+class _NoMissingMetadata(logging.Filter):
+    def filter(self, record: logging.LogRecord) -> bool:
+        return "Missing metadata for file" not in str(record.getMessage())
+
+
+def hide_missing_metadata_warnings() -> None:
+    """Drop Snakemake's report warning about each output no job of this checkout wrote (one per
+    file of a committed or never-built study: hundreds after a fresh clone); ``plan`` states per
+    study whether it was built here."""
+    logging.getLogger("snakemake.logging").addFilter(_NoMissingMetadata())
 
 
 def page_stage(out: str | os.PathLike, title: str, source: str | os.PathLike | None = None,
