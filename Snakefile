@@ -39,6 +39,7 @@ include: "workflow/rules/theory.smk"
 include: "workflow/rules/work_precision.smk"
 include: "workflow/rules/stability.smk"
 include: "workflow/rules/true_norms.smk"
+include: "workflow/rules/report.smk"
 
 
 rule all:

@@ -189,3 +189,24 @@ def test_notebook_executes(path, executed):
     assert any("image/png" in o.get("data", {}) for o in outputs), "no figure produced"
     text = "".join(o.get("text", "") for o in outputs if o.get("output_type") == "stream")
     assert "scene 'smoke'" in text  # the notebook read the copy's smoke scene, not the developer's results/
+
+
+@pytest.mark.slow
+def test_convergence_notebook_on_a_users_scene(notebook_env, monkeypatch):
+    """Notebook 02 on the user's scene ``mine`` (other meshes, norms L2 and H1 only): no published
+    value, no paper row, an expected order for every norm, no Figure 3 (it has no L4/W14)."""
+    monkeypatch.setenv(explore.SCENE_ENV, "mine")
+    path = notebook_env / "notebooks" / "02_convergence.py"
+    nb = jupytext.read(path)
+    NotebookClient(nb, kernel_name=KERNEL, timeout=TIMEOUT_PER_CELL,
+                   resources={"metadata": {"path": str(path.parent)}}).execute()
+    outputs = [o for cell in nb.cells if cell.cell_type == "code" for o in cell.get("outputs", [])]
+    assert not [o for o in outputs if o.get("output_type") == "error"]
+    text = "".join(o.get("text", "") for o in outputs if o.get("output_type") == "stream")
+    plain = [o.get("data", {}).get("text/plain", "") for o in outputs]
+    assert "scene 'mine'" in text and "no published values: scene 'mine'" in text
+    assert not any("paper" in p for p in plain if "ours" in p)  # the tables hold ours only
+    assert not any("1/101" in p for p in plain)  # no row of the paper's meshes
+    summary = next(p for p in plain if "regression slope" in p)
+    assert "NaN" not in summary and "no theory" not in summary  # L2: 2, H1: 1
+    assert "no Figure 3" in text

@@ -1,15 +1,23 @@
-"""The Snakemake report (``make report``): every table and figure of the built test workflow is in
-it, with its caption and its study's category."""
+"""The Snakemake report (``make report``, ``signorini.pipeline.report``): every table and figure
+that exists is in it with its caption, the Markdown outputs as inline HTML pages; it says per
+study whether it was built here or comes from the committed files, and works on a fresh clone."""
 
 from __future__ import annotations
 
+import base64
 import json
+import os
 import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
-from helpers import snakemake
+from helpers import ROOT, clone_built, copy_repo
 
-from signorini.pipeline.paths import FIGURES, PATHS, TARGETS, built_targets
+from signorini.pipeline import report
+from signorini.pipeline.paths import FIGURES, REPORT_CONTENTS, REPORT_PAGES, TARGETS, report_page
 
 CATEGORIES = {
     "all": "Paper",
@@ -28,13 +36,30 @@ def embedded(html: str, name: str) -> dict:
     return json.loads(m.group(1))
 
 
+def make_report(repo: Path) -> subprocess.CompletedProcess:
+    """What ``make report`` runs, in ``repo``."""
+    return subprocess.run(
+        [sys.executable, "-m", "signorini.pipeline.report", "build"],
+        cwd=repo, capture_output=True, text=True, timeout=900,
+        env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1", "PYTHONPATH": str(repo / "src")},
+    )
+
+
+def page_text(results: dict, path: str) -> str:
+    return base64.b64decode(results[path]["data_uri"].split("base64,", 1)[1]).decode("utf-8")
+
+
 @pytest.mark.slow
 def test_report_holds_every_table_and_figure(built_repo, tmp_path):
-    targets = built_targets(built_repo)
-    assert targets == list(TARGETS)  # every study of the test workflow is built
-    out = tmp_path / "report.html"
-    snakemake(built_repo, "--report", str(out), *targets)
-    html = out.read_text()
+    repo = clone_built(built_repo, tmp_path / "repo")
+    assert [s.target for s in report.plan(repo) if s.built_here and not s.missing] == list(TARGETS)
+    proc = make_report(repo)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    out = proc.stdout + proc.stderr
+    assert "Missing metadata" not in out and "Traceback" not in out
+    assert len(out.splitlines()) < 20, out  # the status per study, no flood
+    assert out.count("built on this machine") == len(TARGETS)
+    html = (repo / "results/report.html").read_text(encoding="utf-8")
     results, categories = embedded(html, "results"), embedded(html, "categories")
     for target, rules in TARGETS.items():
         listed = {path for paths in categories[CATEGORIES[target]].values() for path in paths}
@@ -44,12 +69,67 @@ def test_report_holds_every_table_and_figure(built_repo, tmp_path):
                 caption = results[path]["caption"]
                 assert caption.strip() and "ERROR" not in caption and "System Message" not in caption, path
                 assert results[path]["data_uri"].startswith("data:"), path  # self-contained
-    for table in ("errors_csv", "eoc_csv"):  # the scenes' tables, under their scene
-        assert PATHS[table].format(scene="smoke") in results
-    assert "Replication of the numerical experiments" in out.read_text()  # the workflow description
+    for page, source in REPORT_PAGES.items():  # every Markdown output also as an inline HTML page
+        path = report_page(page)
+        assert results[path]["mime_type"] == "text/html", path  # shown inline, not as a download
+        assert results[path]["caption"] == results[source]["caption"], path
+        text = page_text(results, path)
+        assert "<table>" in text or page in ("theory", "work_precision", "stability"), path
+        assert "<h1>" in text or "<strong>" in text, path
+    table1 = page_text(results, report_page("table1"))
+    assert "<th" in table1 and "1/21" in table1 and "·10" in table1  # the smoke scene's rows, as in table1.md
+    for scene in ("smoke", "mine"):  # each scene's errors and EOCs, under its scene
+        page = f"results/report/scene_{scene}.html"
+        assert page in categories["Scenes"][scene]
+        assert "regr." in page_text(results, page)
+    assert "built on this machine" in page_text(results, REPORT_CONTENTS)
+    assert "Replication of the numerical experiments" in html  # the workflow description
 
 
-def test_nothing_built_means_no_report_target(tmp_path):
-    (tmp_path / "workflow").mkdir()
-    (tmp_path / "workflow/config.yaml").write_text("figures_scene: paper\n")
-    assert built_targets(tmp_path) == []
+@pytest.mark.slow
+def test_report_of_a_fresh_clone_shows_the_committed_outputs(tmp_path):
+    """A clone with the committed paper_figures/ and nothing built: no crash, every committed
+    output in the report, each study named as the repository's committed files."""
+    repo = copy_repo(tmp_path)
+    shutil.copytree(ROOT / "paper_figures", repo / "paper_figures")
+    proc = make_report(repo)
+    assert proc.returncode == 0, proc.stdout[-3000:] + proc.stderr[-3000:]
+    out = proc.stdout + proc.stderr
+    assert "Traceback" not in out and "Missing metadata" not in out and len(out.splitlines()) < 20, out
+    assert "built on this machine" not in out and out.count("committed files") == len(TARGETS)
+    assert "missing: runtime" in out  # runtime.csv is a measurement of this machine: never committed
+    results = embedded((repo / "results/report.html").read_text(encoding="utf-8"), "results")
+    committed = {f"paper_figures/{p.name}" for p in (ROOT / "paper_figures").iterdir()}
+    assert committed <= set(results), sorted(committed - set(results))
+    for page in ("table1", "table2", "reproduction", "theory"):
+        assert results[report_page(page)]["mime_type"] == "text/html"
+    assert not (repo / "results/theory").exists()  # nothing was recomputed
+
+
+def test_a_study_is_built_here_only_with_its_cached_results(tmp_path):
+    (tmp_path / "paper_figures").mkdir()
+    config = {"figures_scene": "paper", "scenes": {"paper": {"N": [11, 21]}}}
+    assert all(not s.rules for s in report.plan(tmp_path, config))  # nothing at all
+    for path in (*FIGURES["table1"].values(), *FIGURES["table2"].values()):
+        (tmp_path / path).write_text("x", encoding="utf-8")
+    paper = report.plan(tmp_path, config)[0]
+    assert paper.rules == ["table1", "table2"] and not paper.built_here  # committed files only
+    assert "committed" in paper.status and "missing: figure2" in paper.status
+    (tmp_path / "results/paper").mkdir(parents=True)
+    (tmp_path / "results/paper/errors.csv").write_text("N,h,L4\n", encoding="utf-8")
+    assert not report.plan(tmp_path, config)[0].built_here  # errors.csv alone: eoc.csv is missing
+    (tmp_path / "results/paper/eoc.csv").write_text("N,h,L4\n", encoding="utf-8")
+    assert report.plan(tmp_path, config)[0].built_here
+    # the reproduction report needs Tables 1-2: without them it is not in the report
+    shutil.rmtree(tmp_path / "paper_figures")
+    (tmp_path / "paper_figures").mkdir()
+    (tmp_path / FIGURES["reproduction"]["md"]).write_text("x", encoding="utf-8")
+    assert "reproduction" in report.plan(tmp_path, config)[0].missing
+
+
+def test_markdown_page_renders_tables_inline_and_escapes_html():
+    text = "# T\n\n| h | L⁴(Ω) |\n| --- | ---: |\n| 1/11 | 5.8·10⁻⁴ |\n\n<script>x</script>\n"
+    page = report.markdown_page(text, "t")
+    assert "<table>" in page and '<td style="text-align:right">5.8·10⁻⁴</td>' in page
+    assert "<script>x" not in page and "&lt;script&gt;" in page
+    assert page.startswith("<!DOCTYPE html>") and 'charset="utf-8"' in page

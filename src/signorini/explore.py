@@ -228,12 +228,39 @@ def paper_reference(table: int, root: str | os.PathLike | None = None):
     return pd.DataFrame.from_dict(rows, orient="index")
 
 
+def published_mismatch(
+    problem: Problem, diagonal: str, conventions, Ns: Sequence[int], paper_Ns: Sequence[int]
+) -> str | None:
+    """Why the published values do not belong to a scene (None: they do).  They are the errors of
+    the paper's problem (``Problem()``) on its triangulation (``DEFAULT_DIAGONAL``) under the
+    default norm conventions on the meshes of its tables (``paper_Ns``): another problem or other
+    meshes give other numbers, which a table next to the paper's would pass off as comparable."""
+    from signorini.fem.norms import Conventions
+
+    if problem != Problem():
+        return f"its problem {problem.as_dict()} is not the paper's {Problem().as_dict()}"
+    if diagonal != DEFAULT_DIAGONAL:
+        return f"its triangulation (diagonal {diagonal!r}) is not the paper's ({DEFAULT_DIAGONAL!r})"
+    if conventions != Conventions():
+        return f"its norm conventions {conventions.as_dict()} are not the defaults {Conventions().as_dict()}"
+    if [int(N) for N in Ns] != [int(N) for N in paper_Ns]:
+        return f"its meshes N = {list(Ns)} are not the paper's N = {list(paper_Ns)}"
+    return None
+
+
+def scene_published_mismatch(scene: Scene) -> str | None:
+    """``published_mismatch`` of a built scene (its problem, diagonal and conventions from its
+    artifacts; the paper's meshes from ``workflow/reference/paper_table1.csv``)."""
+    paper_Ns = [_denominator(lab) for lab in paper_reference(1, scene.root).index]
+    return published_mismatch(scene.problem, scene.diagonal, scene.conventions, scene.Ns, paper_Ns)
+
+
 def ours_table(scene: Scene, table: int):
     """Our Table 1 (errors) or Table 2 (EOCs, ``regr.``, ``theo.``) of a scene, indexed like the paper's."""
     import pandas as pd
 
     from signorini.formatting import h_label
-    from signorini.paper import TABLE1_NORMS, TABLE2_NORMS, THEORETICAL_ORDERS
+    from signorini.paper import TABLE1_NORMS, TABLE2_NORMS, expected_rate
 
     if table == 1:
         df = scene.errors()
@@ -243,18 +270,25 @@ def ours_table(scene: Scene, table: int):
     norms = [n for n in TABLE2_NORMS if n in df.columns]
     labels = ["regr." if str(N) == "regression" else h_label(N) for N in df["N"]]
     out = pd.DataFrame(df[norms].to_numpy(dtype=float), index=labels, columns=norms)
-    out.loc["theo."] = [THEORETICAL_ORDERS[n] for n in norms]
+    out.loc["theo."] = [expected_rate(n) for n in norms]
     return out
 
 
 def side_by_side(scene: Scene, table: int):
-    """Ours, the paper's and the relative deviation per norm (MultiIndex columns ``(norm, what)``);
-    rows: the union of both tables' labels (a smoke scene shares no mesh with the paper)."""
+    """Ours, the paper's and the relative deviation per norm (MultiIndex columns ``(norm, what)``)
+    for the paper's scene; for any other scene (``scene_published_mismatch``) ours only, the
+    reason in ``.attrs["published"]``."""
     import pandas as pd
 
     from signorini.studies.paper.reference import relative_deviation
 
-    ours, paper = ours_table(scene, table), paper_reference(table, scene.root)
+    ours = ours_table(scene, table)
+    mismatch = scene_published_mismatch(scene)
+    if mismatch is not None:
+        out = pd.DataFrame({(norm, "ours"): ours[norm] for norm in ours.columns}, index=ours.index)
+        out.attrs["published"] = f"no published values: scene {scene.name!r} is not the paper's ({mismatch})"
+        return out
+    paper = paper_reference(table, scene.root)
     labels = list(ours.index) + [lab for lab in paper.index if lab not in ours.index]
     order = {lab: i for i, lab in enumerate(labels)}
     tail = ("regr.", "theo.")

@@ -7,9 +7,6 @@ the rules, the cache checks, the notebooks' helpers and the tests all read them 
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
-
 RESULTS = "results"  # the cached artifacts, logs and benchmark files
 FIGDIR = "paper_figures"
 REFERENCE = "workflow/reference"
@@ -116,31 +113,30 @@ TARGETS = {
 }
 
 
-def _required(target: str, figures_scene: str) -> list[str]:
-    """The files a report of ``target`` shows: its rendered outputs and its scenes' tables."""
-    files = [path for rule in TARGETS[target] for path in FIGURES[rule].values()]
-    scene = {"all": figures_scene, "theory": "theory"}.get(target)
-    if scene is not None:
-        files.append(PATHS["errors_csv"].format(scene=scene))
-    if target == "all":
-        files.append(PATHS["eoc_csv"].format(scene=scene))
-    return files
+# what a rendering rule reads from other rendering rules: it is in the report only with them
+RENDER_INPUTS = {
+    "reproduction": ("table1", "table2"),
+    "work_precision_figures": ("work_precision_table",),
+    "work_precision_report": ("work_precision_table",),
+}
+
+# The report's pages (signorini.pipeline.report): {page: the Markdown output it shows inline}, each
+# rendered to results/report/<page>.html; and one page per scene with its errors and EOCs.
+REPORT_DIR = "results/report"
+REPORT_PAGES = {
+    "table1": FIGURES["table1"]["md"],
+    "table2": FIGURES["table2"]["md"],
+    "reproduction": FIGURES["reproduction"]["md"],
+    "table1_true": FIGURES["true_tables"]["table1_md"],
+    "table2_true": FIGURES["true_tables"]["table2_md"],
+    "theory": FIGURES["theory_report"]["md"],
+    "work_precision": FIGURES["work_precision_report"]["md"],
+    "stability": FIGURES["stability_atlas"]["md"],
+}
+REPORT_SCENE_PAGE = f"{REPORT_DIR}/scene_{{scene}}.html"
+REPORT_CONTENTS = f"{REPORT_DIR}/contents.html"  # what is in the report, built here or committed
 
 
-def built_targets(root: str | os.PathLike = ".", figures_scene: str | None = None) -> list[str]:
-    """The targets whose reported files all exist under ``root`` (what ``make report`` reports);
-    ``figures_scene`` defaults to the one of ``workflow/config.yaml``."""
-    if figures_scene is None:
-        import yaml
-
-        config = yaml.safe_load((Path(root) / "workflow/config.yaml").read_text())
-        figures_scene = config.get("figures_scene", "paper")
-    return [
-        target
-        for target in TARGETS
-        if all((Path(root) / path).exists() for path in _required(target, figures_scene))
-    ]
-
-
-if __name__ == "__main__":  # `python -m signorini.pipeline.paths`: the built targets, for `make report`
-    print(" ".join(built_targets()))
+def report_page(page: str) -> str:
+    """The HTML page of ``page`` (a key of ``REPORT_PAGES``)."""
+    return f"{REPORT_DIR}/{page}.html"

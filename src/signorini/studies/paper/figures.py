@@ -15,12 +15,13 @@ import os
 from collections.abc import Mapping, Sequence
 
 from signorini.paper import FIGURE3_NORMS, error_label_tex, expected_rate
-from signorini.plotting import new_figure, save
+from signorini.plotting import new_figure, save, style, styled
 
 MARKERS = {"L4": "o", "W14": "s"}
 FIELD_DIGITS = 10  # u and f are exact functions: the libm's last bits are all that can differ
 
 
+@styled
 def figure2(fields: Mapping, fig=None):
     """Surface plots of ``u`` (left) and ``f`` (right) on the unit square, like the paper's Fig. 2.
 
@@ -43,6 +44,7 @@ def figure2(fields: Mapping, fig=None):
     return fig
 
 
+@styled
 def figure3(errors, ax=None, norms: Sequence[str] = FIGURE3_NORMS):
     """The errors in ``norms`` (the paper's ``L⁴`` and ``W^{1,4}``) against ``h``, double-logarithmic,
     each with a reference line ``h^r`` of its expected order ``r`` through the coarsest point,
@@ -100,5 +102,6 @@ def figure3_stage(
     for j, name in enumerate(names):
         errors[name] = [row[j] for row in values]
     ax = figure3(errors)
-    ax.figure.tight_layout()
+    with style():  # the layout measures the tick labels: in the style they are drawn in
+        ax.figure.tight_layout()
     save(ax.figure, out_pdf, out_png)

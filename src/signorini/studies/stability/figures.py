@@ -5,11 +5,12 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from collections.abc import Sequence
 
 import numpy as np
 
-from signorini.plotting import new_figure
+from signorini.plotting import new_figure, styled
 
 STATUS_COLOURS = {
     "ok": "#4caf50",
@@ -32,12 +33,16 @@ def _cell(sel) -> tuple[str, str]:
     rejected = r["status"] == "failed" and r["expected"] == "error" and r["as_expected"]
     status = "rejected" if rejected else r["status"]
     if r["status"] == "failed":
-        return status, str(r["reason"]).split(":", 1)[0].replace("Error", "")[:14]
+        # the error class, without "Error", split at its words so that it fits the cell
+        name = str(r["reason"]).split(":", 1)[0].replace("Error", "")
+        words = re.findall(r"[A-Z]+[a-z0-9]*|[a-z0-9]+", name) or [name]
+        return status, "\n".join(words) if len(name) > 11 else name
     e = r.get("err_L4")
     etxt = f"e {e:.0e}" if not _isnan(e) else ""
     return status, f"k {r['kkt_worst']:.0e}\n{etxt}"
 
 
+@styled
 def status_grid(df, solvers: Sequence[str], ax=None):
     """Case × solver grid coloured by status (blue: bad input rejected with a clear error, as it
     should be), annotated with the worst relative KKT residual (k) and the relative L⁴ error (e)
@@ -94,8 +99,11 @@ def scaling_panels(df, markers: dict, ax_kkt, ax_diff) -> None:
     ax_kkt.set_title("scaling: worst relative KKT residual against the amplitude A", fontsize=9)
     ax_kkt.set_ylabel("KKT residual")
     ax_kkt.legend(fontsize=6.5, ncol=2)
-    ax_diff.set_title("scaling: ‖u_h/A − u_h^ref/A_ref‖∞ / ‖u_h^ref/A_ref‖∞ (failed: no point)", fontsize=9)
-    ax_diff.set_ylabel("Δ(u/A)")
+    ref = r"u_h^{\mathrm{ref}}/A_{\mathrm{ref}}"
+    ax_diff.set_title(
+        rf"scaling: $\|u_h/A - {ref}\|_\infty \,/\, \|{ref}\|_\infty$ (failed: no point)", fontsize=9
+    )
+    ax_diff.set_ylabel(r"$\Delta(u/A)$")
     ax_diff.set_xlabel("amplitude A")
 
 
@@ -114,8 +122,8 @@ def reaction_panels(df, markers: dict, ax_err, ax_cond) -> None:
                           label=f"Δu {solver} vs exact", lw=1, ms=3)
     ax_err.set_title("stiff reaction: errors and distance of the QP solvers to the exact solution", fontsize=9)
     ax_err.legend(fontsize=6, ncol=2)
-    ax_cond.loglog(exact["x"], exact["cond_A"], marker="o", label="κ₂(A), A = K + cM")
-    ax_cond.loglog(exact["x"], exact["cond_free"], marker="s", label="κ₂(A_FF), free block")
+    ax_cond.loglog(exact["x"], exact["cond_A"], marker="o", label=r"$\kappa_2(A)$, $A = K + cM$")
+    ax_cond.loglog(exact["x"], exact["cond_free"], marker="s", label=r"$\kappa_2(A_{FF})$, free block")
     ax_cond.set_xlabel("reaction coefficient c")
     ax_cond.set_ylabel("condition number")
     twin = ax_cond.twinx()
@@ -130,6 +138,7 @@ def reaction_panels(df, markers: dict, ax_err, ax_cond) -> None:
     ax_cond.set_title("stiff reaction: condition numbers and iterations", fontsize=9)
 
 
+@styled
 def atlas_figure(df, solver_order: Sequence[str] = (), fig=None):
     """Left: ``status_grid``.  Right: ``scaling_panels`` and ``reaction_panels``.  Returns the figure."""
     cases = list(dict.fromkeys(df["case"]))

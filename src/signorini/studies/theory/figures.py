@@ -8,9 +8,10 @@ import numpy as np
 
 from signorini.fem.convergence import regression_slope
 from signorini.paper import CRITICAL_P, expected_order
-from signorini.plotting import new_figure
+from signorini.plotting import new_figure, styled
 
 
+@styled
 def rate_figure(rates, ax=None):
     """Measured slope against 1/p (regression over all meshes and over the finest three) with the
     theoretical curves (kink at the critical p = 4).  ``rates``: ``report.rate_rows``.  Returns the axes."""
@@ -35,6 +36,7 @@ def rate_figure(rates, ax=None):
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, loc="lower right")
     ax.set_title("Rate against p (theory: Theorem 6.1, Remark 6.2)")
+    ax.figure.tight_layout()
     return ax
 
 
@@ -46,14 +48,20 @@ def _loglog_panel(ax, table, curves, refs) -> None:
         y = table[col].to_numpy()
         ax.loglog(h, y, "o-", label=f"{label} (slope {regression_slope(h, y):.2f})")
     for r, anchor in refs:
+        # the reference line h^r lies below its curve (0.7 of its finest value); its label sits
+        # right of the coarsest end, in the margin the wider x-range leaves, not on the lines
         y0 = 0.7 * table[anchor].iloc[-1]
-        ax.loglog(h, y0 * (h / h[-1]) ** r, "k--", lw=0.7, alpha=0.6)
-        ax.annotate(f"$h^{{{r:g}}}$", (h[0], y0 * (h[0] / h[-1]) ** r), fontsize=7, alpha=0.7)
-    ax.set_xlabel("h")
+        ref = y0 * (h / h[-1]) ** r
+        ax.loglog(h, ref, "k--", lw=0.8, alpha=0.6)
+        ax.annotate(f"$h^{{{r:g}}}$", (h.max(), ref[h.argmax()]), xytext=(6, 0), textcoords="offset points",
+                    ha="left", va="center", fontsize="medium", color="0.3")
+    ax.set_xlim(h.min() / 1.25, h.max() * 1.8)
+    ax.set_xlabel("mesh width $h$")
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize="small")
 
 
+@styled
 def extra_figure(table, fig=None):
     """Three panels: supercloseness against the H¹ error; the discrete and interpolation
     ``H^{1/2}`` values and the one-sided ``L⁴`` parts; the end of the contact set at the free
@@ -81,10 +89,11 @@ def extra_figure(table, fig=None):
     axes[1].set_title(r"$H^{1/2}(\partial\Omega)$ and one-sided $L^4$")
     h = table["h"].to_numpy()
     ax = axes[2]
-    ax.loglog(h, np.abs(table["free_point_offset"]), "o-", label="end of contact set at (x0, 0): |offset|")
-    ax.loglog(h, h, "k--", lw=0.7, label="h")
-    ax.set_xlabel("h")
+    ax.loglog(h, np.abs(table["free_point_offset"]), "o-", label=r"end of the contact set: $|x_{\mathrm{end}} - x_0|$")
+    ax.loglog(h, h, "k--", lw=0.8, label="$h$")
+    ax.set_xlabel("mesh width $h$")
     ax.set_title("Contact set near the free point")
     ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize="small")
+    fig.tight_layout()
     return fig

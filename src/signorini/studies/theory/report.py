@@ -250,9 +250,5 @@ def report_stage(
         for N, path in zip(errors["N"], paths, strict=True)
     ]
     atomic_write_text(outs["md"], findings(table, rates, table2_rows(errors), true_table2, accuracy))
-    ax = rate_figure(rates)
-    ax.figure.tight_layout()
-    save(ax.figure, outs["rates_pdf"], outs["rates_png"])
-    fig = extra_figure(table)
-    fig.tight_layout()
-    save(fig, outs["extra_pdf"], outs["extra_png"])
+    save(rate_figure(rates).figure, outs["rates_pdf"], outs["rates_png"])
+    save(extra_figure(table), outs["extra_pdf"], outs["extra_png"])

@@ -9,7 +9,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from signorini.paper import PAPER_NORMS, label_tex
-from signorini.plotting import new_figure, save
+from signorini.plotting import new_figure, save, styled
 from signorini.studies.work_precision.study import FIGURE_NORMS
 from signorini.studies.work_precision.table import tolerance_order
 
@@ -101,6 +101,7 @@ def _legend_handles(df, configs, colors, order) -> list:
     ]
 
 
+@styled
 def work_precision_figure(df, figure_N: Sequence[int] = (), fig=None):
     """Algebraic error ``‖u_h^solver − u_h^exact‖`` (rows: ``L⁴``, ``W^{1,4}``) against solve time,
     log-log, one panel column per ``N`` of ``figure_N`` (default: coarsest, middle, finest).
@@ -162,6 +163,7 @@ def _exact_runs(df):
     return exact[exact["config"] == first].sort_values("N"), exact
 
 
+@styled
 def cost_panel(df, ax=None):
     """Total error ``‖u − u_h‖`` of the exact solver in every norm of the paper against total run
     time (assembly + solve) over the mesh sequence, log-log, with the fitted slope per norm."""
@@ -174,10 +176,17 @@ def cost_panel(df, ax=None):
         slope = np.polyfit(np.log(total), np.log(e), 1)[0] if len(e) > 1 else float("nan")
         ax.loglog(total, e, marker="o", markersize=4, label=f"{label_tex(norm, domain=False)} (slope {slope:.2f})")
     e_all = ex[[f"total_{n}" for n in norms]]
-    for t, e, N in zip(total, e_all.max(axis=1).to_numpy(dtype=float), ex["N"], strict=True):
-        ax.annotate(f"1/{N}", (t, e), textcoords="offset points", xytext=(0, 6), ha="left", fontsize=8, rotation=40)
+    # each mesh's h above its largest error, horizontal; the limits leave room for these labels
+    # (top), the legend (bottom) and the first and last label (left and right)
+    # (every other one higher: neighbouring run times can be close)
+    tops = e_all.max(axis=1).to_numpy(dtype=float)
+    for k, (t, e, N) in enumerate(zip(total, tops, ex["N"], strict=True)):
+        ax.annotate(f"1/{N}", (t, e), textcoords="offset points", xytext=(0, 6 + 10 * (k % 2)), ha="center",
+                    fontsize="x-small")
+    ax.text(0.02, 0.98, "labels: mesh width $h$", transform=ax.transAxes, ha="left", va="top", fontsize="x-small")
     values = e_all.to_numpy(dtype=float)
-    ax.set_ylim(np.nanmin(values) / 300.0, np.nanmax(values) * 4.0)  # room for the legend and the labels
+    ax.set_ylim(np.nanmin(values) / 300.0, np.nanmax(values) * 8.0)
+    ax.set_xlim(total.min() / 1.8, total.max() * 1.8)
     ax.set_xlabel("total run time: assembly + solve [s]")
     ax.set_ylabel(r"total error $\|u - u_h\|$")
     ax.set_title(f"Cost of accuracy: {ex['label'].iloc[0]}")
@@ -201,6 +210,7 @@ def _peer_lines(df, ax) -> None:
         ax.loglog(x, v["time_s"], marker=".", linestyle="--", color=colors[config], label=f"{v['label']}{p}")
 
 
+@styled
 def time_panel(df, ax=None):
     """Where the time goes: assembly and every exact solver configuration against the unknowns;
     dashed: each PETSc peer's time to Table 1's digits (``findings.peer_comparison``)."""
@@ -217,7 +227,8 @@ def time_panel(df, ax=None):
     ax.set_ylabel("wall time [s]")
     ax.set_title("Where the time goes")
     ax.grid(True, which="major", linewidth=0.3, alpha=0.6)
-    ax.legend(fontsize=6 if is_peer_table(df) else 8, loc="upper left", ncol=2 if is_peer_table(df) else 1)
+    # below the axes: inside, the many lines of the peers leave no free corner
+    ax.legend(fontsize="x-small", loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False)
     return ax
 
 
@@ -228,6 +239,7 @@ def is_peer_table(df) -> bool:
     return bool(is_peer(df).any())
 
 
+@styled
 def cost_of_accuracy(df, fig=None):
     """``cost_panel`` (left) and ``time_panel`` (right) side by side.  ``df``: ``work_precision.csv``."""
     from matplotlib.ticker import NullFormatter
@@ -236,6 +248,8 @@ def cost_of_accuracy(df, fig=None):
     ax, ax2 = fig.subplots(1, 2)
     cost_panel(df, ax)
     time_panel(df, ax2)
+    rows = -(-len(ax2.get_legend_handles_labels()[0]) // 2)  # time_panel's legend below it
+    fig.set_size_inches(11.0, 4.6 + 0.17 * rows)
     for a in (ax, ax2):
         a.xaxis.set_minor_formatter(NullFormatter())
     fig.tight_layout()
