@@ -96,10 +96,16 @@ def qp_settings(qp_solver: str) -> dict[str, type] | None:
 
 def route_options(route: str) -> tuple[str, dict[str, Option] | None]:
     """The function a solver route reaches and the options it accepts (None: not checked): the
-    scene's solver names (``active_set``, ``cvxpy_<QP>``) and a work-precision configuration's
-    (``active_set`` or the QP solver's name, e.g. ``OSQP``)."""
+    scene's solver names (``active_set``, ``multigrid``, ``auto``, ``cvxpy_<QP>``) and a
+    work-precision configuration's (an exact route or the QP solver's name, e.g. ``OSQP``).
+    ``auto`` takes the options both exact routes accept (it picks one by the mesh's size)."""
     if route == "active_set":
         return "active_set_solve", signature_options("active_set", "active_set_solve")
+    if route == "multigrid":
+        return "multigrid_solve", signature_options("multigrid", "multigrid_solve")
+    if route == "auto":
+        direct, multigrid = route_options("active_set")[1], route_options("multigrid")[1]
+        return "active_set_solve and multigrid_solve", {k: v for k, v in direct.items() if k in multigrid}
     qp = route.removeprefix("cvxpy_")
     settings = qp_settings(qp)
     if settings is None:
