@@ -21,9 +21,10 @@ from signorini.solvers.result import SolveResult
 
 SOLVERS = ("active_set", "multigrid", "auto", "cvxpy")
 EXACT_SOLVERS = ("active_set", "multigrid", "auto")  # the certified active-set routes
-# ``auto`` takes the multigrid route from this many unknowns on (the crossover measured side by
-# side on the paper's problem, docs: solver routes)
-MULTIGRID_FROM_UNKNOWNS = 100_000
+# ``auto`` takes the multigrid route from this many unknowns on (N ≈ 775): the crossover of the
+# two routes on the paper's problem with the cascade, measured side by side in one process each
+# at N = 501, 701 and 1001 (the direct route ahead at 701, the multigrid route well ahead at 1001)
+MULTIGRID_FROM_UNKNOWNS = 600_000
 
 
 def exact_route(name: str, n: int) -> str:
