@@ -129,6 +129,9 @@ def test_a_mesh_that_cannot_fit_is_refused_before_any_job(N, limit, message):
         ("cvxpy_clarabel", {"max_iter": "5"}, "solver_options.max_iter: '5' is not of type int"),
         ("cvxpy", {"qp_solver": "OSQP", "tol": "1e-8"}, "solver_options.tol: '1e-8' is not of type float"),
         ("cvxpy_osqp", {"normalize": "yes"}, "solver_options.normalize: 'yes' is not of type bool"),
+        ("multigrid", {"backend": "cholmod"}, "solver_options.backend: not an option of multigrid_solve"),
+        ("multigrid", {"inner_rtol": "1e-8"}, "solver_options.inner_rtol: '1e-8' is not of type float"),
+        ("auto", {"amg": "classical"}, "solver_options.amg: not an option of active_set_solve and multigrid_solve"),
     ],
 )
 def test_unknown_or_mistyped_solver_options_are_refused(solver, options, message):
@@ -138,7 +141,12 @@ def test_unknown_or_mistyped_solver_options_are_refused(solver, options, message
     config["scenes"]["smoke"].update(solver=solver, solver_options=options)
     with pytest.raises(ConfigError, match=f"scenes.smoke.{message}"):
         check_config(config)
-    valid = {"active_set": {"max_iter": 50, "kkt_tol": 1e-11}, "cvxpy": {"qp_solver": "OSQP", "tol": 1e-8}}
+    valid = {
+        "active_set": {"max_iter": 50, "kkt_tol": 1e-11},
+        "cvxpy": {"qp_solver": "OSQP", "tol": 1e-8},
+        "multigrid": {"amg": "smoothed_aggregation", "inner_rtol": 1e-9, "max_coarse": 100},
+        "auto": {"max_iter": 50, "kkt_tol": 1e-11, "frontier_growth": True},
+    }
     config["scenes"]["smoke"]["solver_options"] = valid.get(solver, {"tol": 1e-8, "normalize": True, "verbose": False})
     check_config(config)
 

@@ -365,6 +365,24 @@ def test_shipped_atlas_parses_and_every_case_builds():
         assert stab_atlas.Atlas.from_job(job).cases[0] == case
 
 
+def test_the_multigrid_column_is_measured_like_the_direct_one():
+    """The multigrid route is an exact column: the certificate's 1e-10, no cvxpy options, and on
+    a case the same contact set and u as the direct route's column."""
+    from signorini.fem.norms import evaluate_norms
+
+    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    atlas = stab_atlas.scene_atlas(config, "stability")
+    spec = atlas.solvers["multigrid"]
+    assert spec.solver == "multigrid" and spec.kkt_tol == 1e-10
+    disc = stab_cases.build_case(atlas.case("A_1"))
+    norms = list(atlas.norms)
+    u_norms = evaluate_norms(disc.problem, disc.mesh, np.zeros(disc.b.size), norms)
+    mg = stab_cases._solve_and_measure(disc, spec, norms, u_norms)
+    direct = stab_cases._solve_and_measure(disc, atlas.solvers["active_set"], norms, u_norms)
+    assert mg["row"]["cert"]["ok"] and np.array_equal(mg["active"], direct["active"])
+    assert np.abs(mg["u"] - direct["u"]).max() <= 1e-12 * np.abs(direct["u"]).max()
+
+
 @pytest.mark.parametrize(
     "change, field",
     [

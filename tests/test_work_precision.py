@@ -84,6 +84,15 @@ def test_study_configs_add_installed_solvers():
     assert configs["clarabel"].solver == "CLARABEL" and not configs["clarabel"].exact
 
 
+def test_every_exact_route_is_an_exact_configuration():
+    """The direct and the multigrid route (and auto) run once, certified, labelled exact."""
+    study = {"configs": {name: {"solver": name} for name in ("active_set", "multigrid", "auto")}}
+    configs = study_configs(study)
+    for config in configs.values():
+        assert config.exact and config.solver in ("active_set", "multigrid", "auto")
+        assert wp.planned_runs(config, [1e-2, 1e-8]) == [None] and wp.tolerance_label(None, config) == "exact"
+
+
 def test_skip_reason_from_the_previous_mesh():
     ok = {"N": 101, "n_dofs": 10404, "status": "ok", "reason": "", "time_s": 10.0}
     assert wp.skip_reason(None, 40401, 120.0) is None

@@ -16,7 +16,6 @@ Where the notebooks look:
 
 from __future__ import annotations
 
-import logging
 import math
 import os
 import subprocess
@@ -365,49 +364,16 @@ def element_errors(problem: Problem, mesh, u_h: np.ndarray, conventions=None) ->
     }
 
 
-class _Collect(logging.Handler):
-    def __init__(self) -> None:
-        super().__init__(logging.DEBUG)
-        self.records: list[logging.LogRecord] = []
-
-    def emit(self, record: logging.LogRecord) -> None:
-        self.records.append(record)
-
-
 def active_set_history(disc, **options):
     """Solve ``disc`` with the active-set solver and return ``(result, history)``: one row per
-    Newton step (active nodes, changes, factorisations and low-rank correction columns so far, elapsed
-    time), read from the solver's own progress messages (``signorini.solvers.active_set``)."""
+    Newton step of the final solve (active nodes, changes, factorisations and low-rank correction
+    columns so far, elapsed time), the solver's own ``SolveResult.history``."""
     import pandas as pd
 
     from signorini.fem.solve import solve_discrete
 
-    logger = logging.getLogger("signorini.solvers.active_set")
-    handler, old_level = _Collect(), logger.level
-    logger.addHandler(handler)
-    logger.setLevel(logging.DEBUG)
-    try:
-        result = solve_discrete(disc, "active_set", **options)
-    finally:
-        logger.removeHandler(handler)
-        logger.setLevel(old_level)
-    rows: list[dict] = []
-    for rec in handler.records:
-        if rec.msg.startswith("iteration") and len(rec.args) == 6:
-            it, active, changes, factorizations, columns, elapsed = rec.args
-            if int(it) == 1:  # a new solve (the warm-start cascade solves coarser meshes first)
-                rows = []
-            rows.append(
-                {
-                    "iteration": int(it),
-                    "active": int(active),
-                    "changes": int(changes),
-                    "factorizations": int(factorizations),
-                    "correction_columns": int(columns),
-                    "elapsed_s": float(elapsed),
-                }
-            )
-    return result, pd.DataFrame(rows)
+    result = solve_discrete(disc, "active_set", **options)
+    return result, pd.DataFrame(result.history)
 
 
 def existing(root: str | os.PathLike | None, *relpaths: str) -> dict[str, Path]:

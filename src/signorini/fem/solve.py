@@ -1,5 +1,5 @@
-"""Solving (S_h): the exact active-set solver with a cascade warm start, or any solver route
-of ``signorini.solvers``."""
+"""Solving (S_h): an exact active-set route (direct, multigrid or ``auto``) with a cascade warm
+start, or any solver route of ``signorini.solvers``."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import logging
 import numpy as np
 
 from signorini.fem.discrete import DiscreteProblem, build, interpolate_fk
-from signorini.solvers import NotConvergedError, SolveResult, solve
+from signorini.solvers import EXACT_SOLVERS, NotConvergedError, SolveResult, solve
 
 log = logging.getLogger(__name__)
 
@@ -19,11 +19,12 @@ CASCADE_MIN_N = 24  # below this, solve cold
 def solve_discrete(
     disc: DiscreteProblem, solver: str = "active_set", warm_start: str | np.ndarray | None = "cascade", **options
 ) -> SolveResult:
-    """Solve (S_h).  For ``active_set``, ``warm_start="cascade"`` first solves on the
-    coarser mesh ``N // CASCADE_FACTOR`` (recursively) and starts from its interpolant; when the
-    active set does not settle from that start (the contact set grows by one node per step from
-    a start far from it), the solve is repeated from the cold start."""
-    if solver == "active_set":
+    """Solve (S_h).  For the exact routes (``active_set``, ``multigrid``, ``auto``),
+    ``warm_start="cascade"`` first solves on the coarser mesh ``N // CASCADE_FACTOR``
+    (recursively, with the same route name: ``auto`` picks by each mesh's size) and starts from
+    its interpolant; when the active set does not settle from that start (the contact set grows
+    by one node per step from a start far from it), the solve is repeated from the cold start."""
+    if solver in EXACT_SOLVERS:
         if isinstance(warm_start, str):
             if warm_start != "cascade":
                 raise ValueError(f"unknown warm start {warm_start!r}; use 'cascade', None or a vector")

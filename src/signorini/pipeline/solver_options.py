@@ -56,11 +56,21 @@ class Option(NamedTuple):
 
 
 @cache
+def exact_routes() -> tuple[str, ...]:
+    """The certified active-set routes, ``signorini.solvers.EXACT_SOLVERS``, read from its source."""
+    tree = ast.parse((_SOLVERS / "__init__.py").read_text(encoding="utf-8"))
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and any(getattr(t, "id", None) == "EXACT_SOLVERS" for t in node.targets):
+            return tuple(ast.literal_eval(node.value))
+    raise RuntimeError("signorini/solvers/__init__.py defines no EXACT_SOLVERS")
+
+
+@cache
 def signature_options(module: str, function: str) -> dict[str, Option]:
     """The keyword parameters of ``signorini.solvers.<module>.<function>`` after the data
     ``(A, b, constrained)``, read from the source: the type of the default, or for a default of
     None the builtin type of the annotation ``T | None`` (any other: any type)."""
-    tree = ast.parse((_SOLVERS / f"{module}.py").read_text())
+    tree = ast.parse((_SOLVERS / f"{module}.py").read_text(encoding="utf-8"))
     node = next(n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name == function)
     params = node.args.args[3:]
     defaults = node.args.defaults[-len(params) :] if params else []
@@ -96,10 +106,16 @@ def qp_settings(qp_solver: str) -> dict[str, type] | None:
 
 def route_options(route: str) -> tuple[str, dict[str, Option] | None]:
     """The function a solver route reaches and the options it accepts (None: not checked): the
-    scene's solver names (``active_set``, ``cvxpy_<QP>``) and a work-precision configuration's
-    (``active_set`` or the QP solver's name, e.g. ``OSQP``)."""
+    scene's solver names (``active_set``, ``multigrid``, ``auto``, ``cvxpy_<QP>``) and a
+    work-precision configuration's (an exact route or the QP solver's name, e.g. ``OSQP``).
+    ``auto`` takes the options both exact routes accept (it picks one by the mesh's size)."""
     if route == "active_set":
         return "active_set_solve", signature_options("active_set", "active_set_solve")
+    if route == "multigrid":
+        return "multigrid_solve", signature_options("multigrid", "multigrid_solve")
+    if route == "auto":
+        direct, multigrid = route_options("active_set")[1], route_options("multigrid")[1]
+        return "active_set_solve and multigrid_solve", {k: v for k, v in direct.items() if k in multigrid}
     qp = route.removeprefix("cvxpy_")
     settings = qp_settings(qp)
     if settings is None:

@@ -1,8 +1,10 @@
 """Solvers for the discrete Signorini QP behind one interface.
 
 ``solve(name, A, b, constrained, **options)`` with ``name`` one of ``SOLVERS``:
-``active_set`` (exact, certified; the pipeline's solver) or ``cvxpy`` (any
-installed cvxpy QP solver chosen by the ``qp_solver`` option); a shorthand
+``active_set`` (exact, certified, a sparse factorisation: the direct route), ``multigrid``
+(exact, certified, the same active-set iteration with multigrid-preconditioned CG: O(n)),
+``auto`` (``multigrid`` from ``MULTIGRID_FROM_UNKNOWNS`` unknowns on, ``active_set`` below) or
+``cvxpy`` (any installed cvxpy QP solver chosen by the ``qp_solver`` option); a shorthand
 ``cvxpy_clarabel``, ``cvxpy_osqp``, … selects the QP solver in the name.
 """
 
@@ -14,15 +16,31 @@ import scipy.sparse as sp
 from signorini.solvers.active_set import active_set_solve
 from signorini.solvers.certificate import BadInputError, Certificate, KKTError, NotConvergedError, kkt_certificate
 from signorini.solvers.cvxpy_qp import cvxpy_solve, installed_qp_solvers
+from signorini.solvers.multigrid import multigrid_solve
 from signorini.solvers.result import SolveResult
 
-SOLVERS = ("active_set", "cvxpy")
+SOLVERS = ("active_set", "multigrid", "auto", "cvxpy")
+EXACT_SOLVERS = ("active_set", "multigrid", "auto")  # the certified active-set routes
+# ``auto`` takes the multigrid route from this many unknowns on (N ≈ 775): the crossover of the
+# two routes on the paper's problem with the cascade, measured side by side in one process each
+# at N = 501, 701 and 1001 (the direct route ahead at 701, the multigrid route well ahead at 1001)
+MULTIGRID_FROM_UNKNOWNS = 600_000
+
+
+def exact_route(name: str, n: int) -> str:
+    """The route ``name`` takes for ``n`` unknowns: ``auto`` resolved by size, others as named."""
+    if name == "auto":
+        return "multigrid" if n >= MULTIGRID_FROM_UNKNOWNS else "active_set"
+    return name
 
 
 def solve(name: str, A: sp.spmatrix, b: np.ndarray, constrained: np.ndarray, **options) -> SolveResult:
     """Dispatch to a solver route by name; unknown names raise ``ValueError``."""
+    name = exact_route(name, np.shape(b)[0])
     if name == "active_set":
         return active_set_solve(A, b, constrained, **options)
+    if name == "multigrid":
+        return multigrid_solve(A, b, constrained, **options)
     if name == "cvxpy":
         options.pop("warm_start", None)
         return cvxpy_solve(A, b, constrained, solver=options.pop("qp_solver", "CLARABEL"), **options)
@@ -33,6 +51,8 @@ def solve(name: str, A: sp.spmatrix, b: np.ndarray, constrained: np.ndarray, **o
 
 
 __all__ = [
+    "EXACT_SOLVERS",
+    "MULTIGRID_FROM_UNKNOWNS",
     "SOLVERS",
     "BadInputError",
     "Certificate",
@@ -41,7 +61,9 @@ __all__ = [
     "SolveResult",
     "active_set_solve",
     "cvxpy_solve",
+    "exact_route",
     "installed_qp_solvers",
     "kkt_certificate",
+    "multigrid_solve",
     "solve",
 ]

@@ -70,6 +70,26 @@ def data_scales(A: sp.csr_matrix, b: np.ndarray, B: np.ndarray) -> tuple[float, 
     return alpha, beta if beta > 0.0 else 1.0  # b = 0: the solution is u = 0 whatever the scale
 
 
+def solver_settings(solver: str, tol: float | None, options: dict) -> dict:
+    """The options cvxpy passes to ``solver`` (upper case): ``tol`` set as all of its
+    tolerances, OSQP's polishing on by default, HiGHS without its QP regularisation."""
+    options = dict(options)
+    if tol is not None:
+        names, _ = TOLERANCE_OPTIONS.get(solver, ((), None))
+        if not names:
+            raise ValueError(f"no tolerance mapping for solver {solver!r}; pass its options explicitly")
+        options.update({name: tol for name in names})
+    if solver == "OSQP":
+        options.setdefault("polishing", options.pop("polish", True))
+    if solver == "HIGHS":
+        # HiGHS regularises QPs by default, which biases the answer by ~1e-7
+        options.setdefault("qp_regularization_value", 0.0)
+        for name in TOLERANCE_OPTIONS["HIGHS"][0]:
+            if name in options:
+                options[name] = max(float(options[name]), 1e-10)  # HiGHS rejects smaller values
+    return options
+
+
 def cvxpy_solve(
     A: sp.spmatrix,
     b: np.ndarray,
@@ -97,21 +117,7 @@ def cvxpy_solve(
     b = np.asarray(b, dtype=float)
     B = np.asarray(constrained, dtype=np.int64)
     check_qp_data(A, b, B)
-    options = dict(solver_options)
-    if tol is not None:
-        names, _ = TOLERANCE_OPTIONS.get(solver, ((), None))
-        if not names:
-            raise ValueError(f"no tolerance mapping for solver {solver!r}; pass its options explicitly")
-        options.update({name: tol for name in names})
-    if solver == "OSQP":
-        options.setdefault("polishing", options.pop("polish", True))
-    if solver == "HIGHS":
-        # HiGHS regularises QPs by default, which biases the answer by ~1e-7
-        options.setdefault("qp_regularization_value", 0.0)
-        for name in TOLERANCE_OPTIONS["HIGHS"][0]:
-            if name in options:
-                options[name] = max(float(options[name]), 1e-10)  # HiGHS rejects smaller values
-
+    options = solver_settings(solver, tol, solver_options)
     t0 = time.perf_counter()
     # (A, b) = (α A', β b'): the solver sees (A', b'), u = (β/α) u', λ = β λ' (module docstring)
     alpha, beta = data_scales(A, b, B) if normalize else (1.0, 1.0)

@@ -21,6 +21,9 @@ class SolveResult:
     certificate: Certificate
     solver: str
     info: dict = field(default_factory=dict)
+    # one row per Newton step (iteration, active nodes, changes, the route's counters, elapsed
+    # seconds), as the route's ``callback`` received them; empty for routes without steps
+    history: list[dict] = field(default_factory=list)
 
     def summary(self) -> dict:
         """JSON-ready diagnostics (everything but the vectors)."""
@@ -31,4 +34,5 @@ class SolveResult:
             "n_active": int(self.active.size),
             "certificate": self.certificate.as_dict(),
             **self.info,
+            "history": [dict(row) for row in self.history],
         }

@@ -107,7 +107,7 @@ class Atlas:
 
 def _parse_solvers(block: Mapping, where: str) -> tuple[dict[str, SolverSpec], tuple[str, ...]]:
     """The solver columns and the default columns of a case."""
-    from signorini.pipeline.solver_options import check_options
+    from signorini.pipeline.solver_options import check_options, exact_routes
 
     specs: dict[str, SolverSpec] = {}
     for label, spec in (block.get("solvers") or {}).items():
@@ -121,7 +121,7 @@ def _parse_solvers(block: Mapping, where: str) -> tuple[dict[str, SolverSpec], t
             str(label),
             str(spec["solver"]),
             dict(spec.get("options") or {}),
-            float(spec.get("kkt_tol", 1e-10 if spec["solver"] == "active_set" else 1e-6)),
+            float(spec.get("kkt_tol", 1e-10 if spec["solver"] in exact_routes() else 1e-6)),
         )
     if not specs:
         raise AtlasConfigError(f"{where}.atlas.solvers: at least one solver column is required")

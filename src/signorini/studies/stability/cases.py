@@ -155,10 +155,10 @@ def _solve_and_measure(disc, spec: SolverSpec, norms: Sequence[str], u_norms: Ma
     """Solve one case with one solver and measure everything (runs in the child process)."""
     from signorini.fem.norms import evaluate_norms
     from signorini.fem.solve import solve_discrete
-    from signorini.solvers import kkt_certificate
+    from signorini.solvers import EXACT_SOLVERS, kkt_certificate
 
     options = dict(spec.options)
-    if spec.solver == "active_set":
+    if spec.solver in EXACT_SOLVERS:
         options.setdefault("kkt_tol", math.inf)  # classify here, with the solution in hand
     else:
         options.update(check=False, kkt_tol=spec.kkt_tol)
@@ -287,7 +287,7 @@ def run_case(atlas: Atlas, case: Case) -> tuple[dict, dict[str, np.ndarray]]:
         log.info("case %s: building failed: %s", case.name, build_error)
     info["build_s"] = time.perf_counter() - t0
     info["u_norms"] = u_norms
-    if any(atlas.solvers[label].solver != "active_set" for label in case.solvers):
+    if any(atlas.solvers[label].solver.startswith("cvxpy") for label in case.solvers):
         from signorini.solvers import installed_qp_solvers
 
         installed_qp_solvers()  # import cvxpy and its solver interfaces once, before the forks (2-3 s each)

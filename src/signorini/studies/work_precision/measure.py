@@ -156,7 +156,7 @@ def run_solver(
 
     def call():
         if config.exact:
-            return solve_discrete(disc, "active_set", warm_start=warm, **options)
+            return solve_discrete(disc, config.solver, warm_start=warm, **options)
         return cvxpy_solve(disc.A, disc.b, disc.boundary, config.solver, tol=tol, check=False, **options)
 
     times: list[float] = []

@@ -25,7 +25,8 @@ class StudyConfigError(ValueError):
 
 @dataclass(frozen=True)
 class SolverConfig:
-    """One solver configuration: ``solver`` is ``active_set``, a cvxpy QP solver (upper case) or a
+    """One solver configuration: ``solver`` is an exact route (``active_set``, ``multigrid``,
+    ``auto``), a cvxpy QP solver (upper case) or a
     PETSc peer (``petsc_snes``, ``petsc_tao``); ``options`` go to ``solve_discrete`` (active set:
     ``warm_start``, ``backend``, …), ``cvxpy_solve`` (solver options such as ``polishing``) or
     into PETSc's options database (``snes_type``, ``pc_type``, …, without the dash)."""
@@ -37,7 +38,10 @@ class SolverConfig:
 
     @property
     def exact(self) -> bool:
-        return self.solver == "active_set"
+        """A certified active-set route (direct, multigrid or auto)."""
+        from signorini.pipeline.solver_options import exact_routes
+
+        return self.solver in exact_routes()
 
     @property
     def peer(self) -> bool:
@@ -53,12 +57,12 @@ def study_configs(study: Mapping, installed: Sequence[str] = ()) -> dict[str, So
     plus, with ``qp_solvers: installed`` (the QP solvers ``installed``, e.g.
     ``signorini.solvers.installed_qp_solvers()``) or a list of names, one configuration per cvxpy
     QP solver, named by the lower-case solver name, unless a configuration of that name exists."""
-    from signorini.pipeline.solver_options import check_options
+    from signorini.pipeline.solver_options import check_options, exact_routes
 
     out: dict[str, SolverConfig] = {}
     for name, spec in (study.get("configs") or {}).items():
         solver = str(spec["solver"])
-        solver = solver if solver == "active_set" or solver in PEER_SOLVERS else solver.upper()
+        solver = solver if solver in exact_routes() or solver in PEER_SOLVERS else solver.upper()
         out[name] = SolverConfig(name, solver, str(spec.get("label", name)), dict(spec.get("options") or {}))
     qp = study.get("qp_solvers", [])
     if qp == "installed":

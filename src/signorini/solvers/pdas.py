@@ -1,0 +1,220 @@
+"""The primal–dual active set (semismooth Newton) iteration that every exact route shares.
+
+For an active set 𝒜 ⊂ B the Newton step solves ``u_𝒜 = 0``, ``(A u)_F = b_F``
+(F the complement), i.e. ``Ã u = D b`` with ``Ã = D A D + (I - D)`` and ``D`` the
+indicator of F; then ``λ = (A u - b)_𝒜`` and the next set is
+``{i ∈ 𝒜 : λ_i > -ε_λ} ∪ {i ∈ B \\ 𝒜 : u_i < -ε_u}`` with relative thresholds ε (scale-free).
+The iteration stops when the set repeats and the step that repeated it was solved to full
+accuracy.
+
+The routes differ only in how they solve the Newton systems (a ``NewtonSystems``): the direct
+route (``active_set``) with a sparse factorisation and bordered updates, the multigrid route
+(``multigrid``) with preconditioned conjugate gradients, inexact while the set moves.  Both
+report one row per Newton step (``SolveResult.history``, and ``callback`` as it happens).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable
+from typing import Protocol
+
+import numpy as np
+import scipy.sparse as sp
+
+from signorini.solvers.certificate import KKTError, NotConvergedError, check_qp_data, kkt_certificate
+from signorini.solvers.result import SolveResult
+
+StepCallback = Callable[[dict], None]
+
+
+class NewtonSystems(Protocol):
+    """How a route solves ``Ã(F) u = D b`` for the free sets F the iteration visits."""
+
+    exact: bool  # every solve is accurate to round-off (no inexact mode)
+
+    def __call__(self, free: np.ndarray, accurate: bool) -> np.ndarray:
+        """The solution ``u`` (``u = 0`` outside ``free``), to full accuracy if ``accurate``."""
+
+    def counters(self) -> dict:
+        """The route's counters after the last solve (a row of the history)."""
+
+
+def prepare_qp(A: sp.spmatrix, b: np.ndarray, constrained: np.ndarray) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
+    """``A`` as CSR with sorted, summed indices (a copy), ``b`` and ``B`` as arrays, checked."""
+    A = sp.csr_matrix(A, copy=True)
+    A.sum_duplicates()
+    A.sort_indices()
+    b = np.asarray(b, dtype=float)
+    B = np.asarray(constrained, dtype=np.int64)
+    check_qp_data(A, b, B)
+    return A, b, B
+
+
+def clamped_values(
+    A: sp.csr_matrix, rows: np.ndarray, free: np.ndarray, positions: np.ndarray | None = None
+) -> np.ndarray:
+    """CSR values of Ã = D A D + (I - D) in ``A``'s own sparsity pattern (explicit zeros kept,
+    so every active set shares one symbolic factorisation or one matrix layout); ``rows`` is the
+    row of each stored entry.  With ``positions``: the values at those positions of ``A.data``."""
+    pos = slice(None) if positions is None else positions
+    r, c = rows[pos], A.indices[pos]
+    data = np.where(free[r] & free[c], A.data[pos], 0.0)
+    data[(r == c) & ~free[r]] = 1.0
+    return data
+
+
+def boundary_adjacency(A: sp.csr_matrix, B: np.ndarray) -> sp.csr_matrix:
+    """The boundary graph (int8): a node may enter the contact set next to one already in it."""
+    return (abs(A[B][:, B]) > 0).astype(np.int8)
+
+
+def initial_active(
+    A: sp.csr_matrix, b: np.ndarray, B: np.ndarray, warm_start: np.ndarray | None, dilation: int = 0
+) -> np.ndarray:
+    """The first active set (a mask over ``B``): where the warm start vanishes, grown by
+    ``dilation`` boundary neighbours; without a warm start, the nodes pushed outwards."""
+    if warm_start is None:
+        return b[B] <= 0.0
+    w = np.asarray(warm_start, dtype=float)
+    if w.shape != b.shape or not np.all(np.isfinite(w)):
+        raise ValueError(f"warm start must be a finite vector of length {b.size}")
+    # predicted contact: where the warm start vanishes (its residual A w - b is no
+    # multiplier estimate when w is interpolated from a coarser mesh)
+    active = w[B] <= 0.0
+    # Grow the predicted contact set by a few boundary neighbours: for an M-matrix (P1 on
+    # Friedrichs–Keller meshes, c h² small) starting from a superset of the true contact set
+    # keeps the iterates feasible and the active set shrinks monotonically in small steps; an
+    # undersized start instead swings the whole far boundary (where u_h is O(h²)) into contact.
+    if dilation > 0:
+        pattern = boundary_adjacency(A, B)
+        for _ in range(dilation):
+            active = (pattern @ active.astype(np.int8)) > 0
+    return active
+
+
+def next_active(
+    A: sp.csr_matrix,
+    b: np.ndarray,
+    B: np.ndarray,
+    u: np.ndarray,
+    active: np.ndarray,
+    adjacency: sp.csr_matrix | None,
+) -> np.ndarray:
+    """The PDAS update of the mask ``active`` from the Newton iterate ``u``; with ``adjacency``
+    (frontier growth) violated nodes enter only next to the contact set while any such exists."""
+    lam = np.where(active, (A @ u - b)[B], 0.0)
+    # hysteresis below round-off keeps degenerate (u = λ = 0) nodes from flip-flopping;
+    # ≥ keeps them when everything vanishes (f ≡ 0: eps_lam = 0), where releasing the
+    # whole boundary would leave the singular K of c = 0 to factorise
+    eps_lam = 1e-13 * max(np.abs(lam).max(initial=0.0), np.abs(b).max(initial=0.0))
+    eps_u = 1e-13 * np.abs(u).max(initial=0.0)
+    keep = active & (lam >= -eps_lam)
+    grow = ~active & (u[B] < -eps_u)
+    if adjacency is not None:
+        # Grow the contact set only at its ends while that is possible.  An undersized
+        # contact set near the free point pushes the whole far boundary (where u_h is
+        # O(h²)-small and biactive in the limit) below zero; the plain PDAS step would clamp
+        # all of it and release it again, two large changes that each cost a factorisation.
+        # The full step is taken when no violated node touches the contact set, so
+        # termination is PDAS's own.
+        frontier = grow & ((adjacency @ active.astype(np.int8)) > 0)
+        if frontier.any():
+            grow = frontier
+    return keep | grow
+
+
+def free_mask(n: int, B: np.ndarray, active: np.ndarray) -> np.ndarray:
+    """The free set F of the active set ``active`` (a mask over ``B``), as a mask over all nodes."""
+    free = np.ones(n, dtype=bool)
+    free[B[active]] = False
+    return free
+
+
+def iterate(
+    systems: NewtonSystems,
+    A: sp.csr_matrix,
+    b: np.ndarray,
+    B: np.ndarray,
+    active: np.ndarray,
+    max_iter: int,
+    frontier_growth: bool,
+    callback: StepCallback | None,
+    log: logging.Logger,
+) -> tuple[np.ndarray, np.ndarray, list[dict]]:
+    """Newton steps from the mask ``active`` until the set repeats on an accurate solve:
+    ``(u, active, history)``.  Inexact solves while the set moves; a set that repeats on one is
+    solved again accurately, and a change found then goes on inexactly.  A cycle of sets switches
+    to accurate solves for good; a cycle of accurate ones, or ``max_iter`` steps, raises
+    ``NotConvergedError``."""
+    t0 = time.perf_counter()
+    adjacency = boundary_adjacency(A, B) if frontier_growth else None
+    seen: set[bytes] = set()
+    history: list[dict] = []
+    accurate = always = systems.exact
+    for it in range(1, max_iter + 1):
+        u = systems(free_mask(b.size, B, active), accurate)
+        new_active = next_active(A, b, B, u, active, adjacency)
+        counters = systems.counters()
+        row = {
+            "iteration": it,
+            "active": int(active.sum()),
+            "changes": int(np.count_nonzero(new_active != active)),
+            **counters,
+            "elapsed_s": time.perf_counter() - t0,
+        }
+        history.append(row)
+        extra = ", ".join(f"{k}={v:.1e}" if isinstance(v, float) else f"{k}={v}" for k, v in counters.items())
+        # progress of long solves: one line per Newton step
+        log.info("iteration %d: %d active, %d changes, %s, %.2f s", it, row["active"], row["changes"], extra,
+                 row["elapsed_s"])
+        if callback is not None:
+            callback(dict(row))
+        if np.array_equal(new_active, active):
+            if accurate:
+                return u, active, history
+            accurate = True  # the set repeated on an inexact solve: the same set again, accurately
+            continue
+        key = np.packbits(new_active).tobytes()
+        if key in seen:
+            if always:
+                raise NotConvergedError(f"active set cycles after {it} iterations")
+            always = True  # a cycle of inexact steps: go on with accurate ones only
+            seen.clear()
+        seen.add(np.packbits(active).tobytes())
+        active, accurate = new_active, always
+    raise NotConvergedError(f"active set did not repeat within max_iter={max_iter} iterations")
+
+
+def certified_result(
+    A: sp.csr_matrix,
+    b: np.ndarray,
+    B: np.ndarray,
+    u: np.ndarray,
+    active: np.ndarray,
+    kkt_tol: float,
+    t0: float,
+    solver: str,
+    info: dict,
+    history: list[dict],
+) -> SolveResult:
+    """The multiplier ``λ = (A u - b)_𝒜`` of the final set, the KKT certificate, the result;
+    ``KKTError`` when the certificate exceeds ``kkt_tol``."""
+    lam = np.where(active, (A @ u - b)[B], 0.0)
+    u[B[active]] = 0.0
+    cert = kkt_certificate(A, b, B, u, lam, kkt_tol)
+    result = SolveResult(
+        u=u,
+        lam=lam,
+        active=B[active],
+        iterations=len(history),
+        wall_time_s=time.perf_counter() - t0,
+        certificate=cert,
+        solver=solver,
+        info=info,
+        history=history,
+    )
+    if not cert.ok:
+        raise KKTError(f"{solver} solution fails its KKT certificate", cert)
+    return result

@@ -1,0 +1,173 @@
+"""The multigrid route (``signorini.solvers.multigrid``): the same certified discrete solution
+as the direct route (same contact set, max |Δu| ≤ 1e-12 max |u|), its Galerkin hierarchy kept
+exact under changes of the active set, its stopping test, the edge cases and the named errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from signorini.fem.assembly import p1_basis, system_matrix
+from signorini.fem.discrete import build
+from signorini.fem.mesh import boundary_nodes, friedrichs_keller
+from signorini.fem.problem import ConstantProblem, FullContactProblem, Problem
+from signorini.fem.solve import solve_discrete
+from signorini.solvers import KKTError, NotConvergedError, active_set_solve, multigrid_solve
+from signorini.solvers.multigrid import GalerkinHierarchy, pcg
+from signorini.solvers.pdas import clamped_values
+
+AGREEMENT = 1e-12  # max |u_multigrid - u_direct| / max |u_direct|
+SMALL_COARSE = 20  # a coarsest level this small gives the small meshes several levels
+
+
+def assert_same_solution(mg, direct) -> None:
+    assert mg.certificate.ok and mg.certificate.tol == 1e-10
+    np.testing.assert_array_equal(np.sort(mg.active), np.sort(direct.active))
+    scale = np.abs(direct.u).max()
+    assert np.abs(mg.u - direct.u).max() <= AGREEMENT * scale if scale > 0 else np.array_equal(mg.u, direct.u)
+
+
+def test_multigrid_gives_the_direct_solution_on_the_small_cases(small_case):
+    """Cold start, several levels (coarsest ≤ 20 unknowns): the contact set and u of the direct route."""
+    disc, direct = small_case
+    mg = multigrid_solve(disc.A, disc.b, disc.boundary, max_coarse=SMALL_COARSE)
+    assert_same_solution(mg, direct)
+    assert mg.info["levels"] >= 3
+    assert mg.history[-1]["accurate"] and mg.history[-1]["changes"] == 0
+
+
+@pytest.mark.parametrize(("N", "diagonal"), [(101, "sw_ne"), (101, "nw_se"), (201, "sw_ne")])
+def test_multigrid_cascade_gives_the_direct_solution(N, diagonal):
+    """Both routes with their cascade warm start (N // 4 first): same contact set, same u."""
+    disc = build(Problem(), N, diagonal)
+    direct = solve_discrete(disc, "active_set")
+    mg = solve_discrete(disc, "multigrid")
+    assert_same_solution(mg, direct)
+    assert mg.solver == "multigrid" and mg.info["levels"] >= 4
+    # every solve is an inexact step or an accurate one; the last is accurate and repeats the set
+    assert all(row["cg_iterations"] <= 60 for row in mg.history)
+
+
+def _long_double_solution(A: sp.csr_matrix, b: np.ndarray, active: np.ndarray) -> np.ndarray:
+    """The clamped system of the final set solved by sparse LU with residuals in long double:
+    accurate to a few units of round-off."""
+    n = b.size
+    free = np.ones(n, dtype=bool)
+    free[active] = False
+    rows = np.repeat(np.arange(n), np.diff(A.indptr))
+    At = sp.csr_matrix((clamped_values(A, rows, free), A.indices, A.indptr), shape=A.shape)
+    lu = spla.splu(At.tocsc())
+    rhs = np.where(free, b, 0.0)
+    x = lu.solve(rhs)
+    AL, rhsL = At.astype(np.longdouble), rhs.astype(np.longdouble)
+    for _ in range(3):
+        x = x + lu.solve(np.asarray(rhsL - AL @ x.astype(np.longdouble), dtype=float))
+    return x
+
+
+def test_both_routes_are_accurate_to_round_off_at_N201():
+    """Against the final set's system solved with long-double residuals: both routes within
+    1e-13 max |u| (the direct route refines once, the multigrid route solves to ``tol = 1e-14``);
+    a max-norm residual test would accept the unrefined Cholesky solve (1.2e-13)."""
+    disc = build(Problem(), 201)
+    A = sp.csr_matrix(disc.A)
+    for result in (solve_discrete(disc, "active_set"), solve_discrete(disc, "multigrid")):
+        truth = _long_double_solution(A, disc.b, result.active)
+        assert np.abs(result.u - truth).max() <= 1e-13 * np.abs(truth).max(), result.solver
+
+
+def test_no_contact_full_contact_and_zero_data():
+    """f ≡ 1, c = 1: u ≡ 1, no contact; full contact (u = -sin sin); f ≡ 0: u = 0 with every
+    boundary node biactive.  The two routes agree, on three levels."""
+    for problem in (ConstantProblem(1.0, 1.0), FullContactProblem(), ConstantProblem(0.0, 1.0)):
+        disc = build(problem, 41)
+        direct = active_set_solve(disc.A, disc.b, disc.boundary)
+        mg = multigrid_solve(disc.A, disc.b, disc.boundary, max_coarse=SMALL_COARSE)
+        assert_same_solution(mg, direct)
+    assert direct.active.size == disc.boundary.size and np.all(mg.u == 0.0)
+
+
+def test_semicoercive_problems():
+    """c = 0: the manufactured problem is solved (its contact set makes the system definite);
+    f ≡ 0 gives u = 0; a load pushing the whole boundary inwards has no minimiser: a named error."""
+    disc = build(Problem(c=0.0), 41)
+    assert_same_solution(multigrid_solve(disc.A, disc.b, disc.boundary, max_coarse=SMALL_COARSE),
+                         active_set_solve(disc.A, disc.b, disc.boundary))
+    mesh = friedrichs_keller(12)
+    basis = p1_basis(mesh, intorder=2)
+    K, M = system_matrix(basis, 0.0), system_matrix(basis, 1.0) - system_matrix(basis, 0.0)
+    zero = multigrid_solve(K, np.zeros(K.shape[0]), boundary_nodes(mesh), max_coarse=SMALL_COARSE)
+    assert zero.certificate.ok and np.all(zero.u == 0.0)
+    with pytest.raises(NotConvergedError, match="singular"):
+        multigrid_solve(K, M @ np.ones(K.shape[0]), boundary_nodes(mesh), max_coarse=SMALL_COARSE)
+
+
+def test_galerkin_updates_keep_every_coarse_operator_exact(rng):
+    """After a sequence of free sets (few and many changes, both directions), every level's
+    operator is the Galerkin product of the level above, recomputed from scratch."""
+    disc = build(Problem(), 40)
+    A = sp.csr_matrix(disc.A)
+    H = GalerkinHierarchy(A, "classical", max_coarse=SMALL_COARSE)
+    rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
+    B = disc.boundary
+    free = np.ones(A.shape[0], dtype=bool)
+    for flips in (1, 3, 40, B.size, 7):
+        nodes = rng.choice(B, size=flips, replace=False)
+        free[nodes] = ~free[nodes]
+        H.update(free)
+        fine = sp.csr_matrix((clamped_values(A, rows, free), A.indices, A.indptr), shape=A.shape)
+        assert abs(H.matrix - fine).max() == 0.0
+        for level, coarse in zip(H.levels[:-1], H.levels[1:], strict=True):
+            galerkin = level.R @ level.A @ level.P
+            assert abs(coarse.A - galerkin).max() <= 1e-12 * abs(galerkin).max()
+    assert len(H.levels) >= 3
+
+
+def test_pcg_stops_at_the_energy_relative_accuracy():
+    """The stopping ratio bounds the error: CG to 1e-10 is within 1e-9 (max norm) of a direct solve."""
+    disc = build(Problem(), 60)
+    A = sp.csr_matrix(disc.A)
+    H = GalerkinHierarchy(A, "classical", max_coarse=SMALL_COARSE)
+    x, iterations, ratio = pcg(A, disc.b, np.zeros_like(disc.b), H, 1e-10, 100)
+    exact = spla.spsolve(A.tocsc(), disc.b)
+    assert ratio <= 1e-10 and 3 <= iterations <= 30
+    assert np.abs(x - exact).max() <= 1e-9 * np.abs(exact).max()
+    with pytest.raises(NotConvergedError, match="did not reach"):
+        pcg(A, disc.b, np.zeros_like(disc.b), H, 1e-14, 2)
+
+
+def test_history_and_callback_report_each_newton_step(cache):
+    disc = cache.discrete({}, 21)
+    rows: list[dict] = []
+    mg = multigrid_solve(disc.A, disc.b, disc.boundary, max_coarse=SMALL_COARSE, callback=rows.append)
+    assert rows == mg.history and len(rows) == mg.iterations
+    assert [r["iteration"] for r in rows] == list(range(1, mg.iterations + 1))
+    assert rows[-1]["accurate"] and rows[-1]["changes"] == 0 and rows[-1]["active"] == mg.active.size
+    assert sum(r["cg_iterations"] for r in rows) == mg.info["cg_iterations"]
+    assert mg.summary()["history"] == rows  # JSON-ready, next to the counters
+
+
+def test_bad_options_and_truncated_solves_raise_named_errors(cache):
+    disc = cache.discrete({}, 21)
+    A, b, B = disc.A, disc.b, disc.boundary
+    with pytest.raises(ValueError, match="algebraic multigrid"):
+        multigrid_solve(A, b, B, amg="geometric")
+    with pytest.raises(ValueError, match="inner_rtol"):
+        multigrid_solve(A, b, B, tol=1e-6, inner_rtol=1e-8)
+    with pytest.raises(NotConvergedError, match="conjugate gradients"):
+        multigrid_solve(A, b, B, max_coarse=SMALL_COARSE, max_cg_iter=1)
+    with pytest.raises(NotConvergedError, match="max_iter"):
+        multigrid_solve(A, b, B, max_coarse=SMALL_COARSE, max_iter=1)
+    with pytest.raises(KKTError, match="multigrid"):
+        multigrid_solve(A, b, B, max_coarse=SMALL_COARSE, kkt_tol=0.0)
+    with pytest.raises(ValueError, match="warm start"):
+        multigrid_solve(A, b, B, warm_start=np.zeros(b.size - 1))
+
+
+def test_smoothed_aggregation_gives_the_same_solution(cache):
+    disc, direct = cache.discrete({}, 21), cache.solution({}, 21)
+    mg = multigrid_solve(disc.A, disc.b, disc.boundary, amg="smoothed_aggregation", max_coarse=SMALL_COARSE)
+    assert_same_solution(mg, direct)
+    assert mg.info["amg"] == "smoothed_aggregation" and mg.info["levels"] >= 2

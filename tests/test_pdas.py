@@ -1,0 +1,80 @@
+"""The active-set iteration both exact routes share (``signorini.solvers.pdas``): the per-step
+history and callback, and the protocol of inexact and accurate solves."""
+
+from __future__ import annotations
+
+import logging
+
+import numpy as np
+import pytest
+
+from signorini.solvers import NotConvergedError, active_set_solve
+from signorini.solvers.active_set import DirectSystems
+from signorini.solvers.pdas import initial_active, iterate, prepare_qp
+
+log = logging.getLogger(__name__)
+
+
+def test_direct_route_reports_its_history_and_calls_back(cache):
+    disc = cache.discrete({}, 21)
+    rows: list[dict] = []
+    result = active_set_solve(disc.A, disc.b, disc.boundary, callback=rows.append)
+    assert rows == result.history and len(rows) == result.iterations > 1
+    assert [r["iteration"] for r in rows] == list(range(1, result.iterations + 1))
+    assert rows[-1]["changes"] == 0 and rows[-1]["active"] == result.active.size
+    assert rows[-1]["factorizations"] == result.info["factorizations"]
+    assert all(r["elapsed_s"] >= 0.0 for r in rows)
+
+
+class Recorded(DirectSystems):
+    """Exact solves that claim to be inexact unless asked for accuracy; records the requests."""
+
+    exact = False
+
+    def __init__(self, *args, wrong_until: int = 0):
+        super().__init__(*args)
+        self.requests: list[bool] = []
+        self.wrong_until = wrong_until  # inexact solves before this many calls report a wrong u
+
+    def __call__(self, free: np.ndarray, accurate: bool) -> np.ndarray:
+        self.requests.append(accurate)
+        u = super().__call__(free, accurate)
+        if not accurate and len(self.requests) <= self.wrong_until:
+            return -np.abs(u) - 1.0  # every free node looks violated
+        return u
+
+    def counters(self) -> dict:
+        return {"accurate": self.requests[-1]}
+
+
+def _run(disc, systems, max_iter=100):
+    A, b, B = prepare_qp(disc.A, disc.b, disc.boundary)
+    return iterate(systems, A, b, B, initial_active(A, b, B, None), max_iter, True, None, log)
+
+
+def test_a_set_that_repeats_on_an_inexact_solve_is_solved_again_accurately(cache):
+    disc, exact = cache.discrete({}, 21), cache.solution({}, 21)
+    A, b, _ = prepare_qp(disc.A, disc.b, disc.boundary)
+    systems = Recorded(A, b, 40, "auto")
+    u, active, history = _run(disc, systems)
+    assert systems.requests[-1] and not systems.requests[-2]  # the repeat, then its accurate solve
+    assert history[-1]["accurate"] and history[-2]["changes"] == 0
+    assert np.array_equal(np.sort(disc.boundary[active]), np.sort(exact.active))
+
+
+def test_wrong_inexact_steps_go_on_until_an_accurate_solve_settles(cache):
+    """Inexact solves that mislead the set (here: two that report every node violated) cost
+    steps, never the answer: the iteration ends on an accurate solve with the exact solution.
+    The path differs, so a biactive node (u = λ = 0: the corner (1, 0), where f vanishes) may
+    end on the other side: a KKT point either way."""
+    disc, exact = cache.discrete({}, 21), cache.solution({}, 21)
+    A, b, B = prepare_qp(disc.A, disc.b, disc.boundary)
+    systems = Recorded(A, b, 40, "auto", wrong_until=2)
+    u, active, history = _run(disc, systems)
+    assert history[-1]["accurate"] and history[-1]["changes"] == 0
+    assert np.abs(u - exact.u).max() <= 1e-12 * np.abs(exact.u).max()
+    differ = np.setxor1d(B[active], exact.active)
+    residual = A @ u - b
+    assert np.all(u[differ] == 0.0) and np.all(np.abs(residual[differ]) <= 1e-14 * np.abs(b).max())
+    with pytest.raises(NotConvergedError, match="max_iter"):
+        _run(disc, Recorded(A, b, 40, "auto"), max_iter=2)
