@@ -1,7 +1,7 @@
 """Stage ``solve``: solve (S_h) on the assembled system of one scene and ``N``, certified.
 
 Writes ``solution.npz`` (``u``, ``λ``, the contact set and ``algebraic_error``, the first-order
-algebraic error ``δ ≈ u_h − u_h*`` of ``solvers.certificate.linearised_error``) and
+algebraic error ``δ ≈ u_h − u_h*`` of ``solvers.algebraic_error.linearised_error``) and
 ``solution.json`` (the KKT certificate, the size of ``δ``, iterations and timers).  The norm
 stage evaluates each norm of ``δ`` next to the error's: the digits of a reported value that
 round-off cannot change (``signorini.formatting.certified_digits``).  A solution without a valid KKT certificate raises
@@ -18,7 +18,8 @@ from collections.abc import Mapping
 from signorini.fem.discrete import DiscreteProblem
 from signorini.fem.solve import solve_discrete
 from signorini.pipeline.artifacts import save_json, save_npz
-from signorini.solvers.certificate import linearised_error
+from signorini.solvers import exact_route
+from signorini.solvers.algebraic_error import linearised_error
 from signorini.studies.scene.store import SceneMesh, load_system
 
 log = logging.getLogger(__name__)
@@ -41,7 +42,8 @@ def solve_stage(
     t1 = time.perf_counter()
     result = solve_discrete(disc, solver=solver, **dict(solver_options or {}))
     t2 = time.perf_counter()
-    algebraic = linearised_error(A, b, boundary, result.u, result.lam, result.active)
+    route = "multigrid" if exact_route(solver, b.size) == "multigrid" else "active_set"
+    algebraic = linearised_error(A, b, boundary, result.u, result.lam, result.active, route)
     log.info(
         "N=%d solver=%s iterations=%d active=%d certificate: %s; algebraic error max |δ| = %.1e, energy %.1e",
         N,
