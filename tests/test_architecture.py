@@ -22,7 +22,7 @@ import pytest
 from conftest import BUILT_TARGETS
 from helpers import ROOT, clone_built, dry_run_jobs, job_key
 
-from signorini.pipeline.codedeps import ImportCache, _imports, import_closure
+from signorini.pipeline.codedeps import ImportCache, _imports, _module_file, _module_name, import_closure
 
 SRC = ROOT / "src"
 PACKAGE = SRC / "signorini"
@@ -46,6 +46,82 @@ def test_the_mathematics_imports_no_study_plotting_io_or_tables(layer):
     for path in sorted((PACKAGE / layer).rglob("*.py")):
         bad = sorted(n for n in imported_names(path) if n.startswith(banned))
         assert not bad, f"{path.relative_to(ROOT)} imports {bad}"
+
+
+def import_graph(src: Path = SRC) -> dict[str, set[str]]:
+    """{module: the package modules it imports}, at module level or inside a function (not under
+    ``TYPE_CHECKING``: those never run); ``from a import b`` counts as importing ``a.b`` when that
+    is a module, else ``a``."""
+    graph = {}
+    for path in sorted((src / "signorini").rglob("*.py")):
+        module = _module_name(path, src)
+        names = {n for n in _imports(ast.parse(path.read_text(encoding="utf-8")), module, path.name == "__init__.py")
+                 if _module_file(n, src) is not None}
+        graph[module] = {n for n in names if not any(m.startswith(n + ".") for m in names)} - {module}
+    return graph
+
+
+def import_cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components with more than one module (Tarjan's algorithm, iterative)."""
+    index, low, stack, on_stack, cycles = {}, {}, [], set(), []
+    for root in sorted(graph):
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph.get(root, ()))))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, children = work[-1]
+            child = next(children, None)
+            if child is not None:
+                if child not in index:
+                    index[child] = low[child] = len(index)
+                    stack.append(child)
+                    on_stack.add(child)
+                    work.append((child, iter(sorted(graph.get(child, ())))))
+                elif child in on_stack:
+                    low[node] = min(low[node], index[child])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[node])
+            if low[node] == index[node]:
+                component = []
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.append(member)
+                    if member == node:
+                        break
+                if len(component) > 1:
+                    cycles.append(sorted(component))
+    return cycles
+
+
+def test_no_import_cycles_in_the_package():
+    """No module of ``src/`` imports itself through others, not even inside a function."""
+    graph = import_graph()
+    assert "signorini.fem.conventions" in graph["signorini.fem.p1norms"]  # the graph sees imports
+    assert import_cycles(graph) == []
+
+
+def test_the_cycle_finder_finds_function_level_and_longer_cycles(tmp_path):
+    src = tmp_path / "src"
+    files = {
+        "signorini/__init__.py": "",
+        "signorini/a.py": "def f():\n    from signorini import b\n",  # a -> b, inside a function
+        "signorini/b.py": "from signorini.c import x\n",  # b -> c
+        "signorini/c.py": "import signorini.a\nx = 1\n",  # c -> a: the circle a -> b -> c -> a
+        "signorini/d.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    from signorini import e\n",
+        "signorini/e.py": "from signorini import d\n",  # d -> e only for type checkers: no cycle
+    }
+    for rel, text in files.items():
+        (src / rel).parent.mkdir(parents=True, exist_ok=True)
+        (src / rel).write_text(text, encoding="utf-8")
+    graph = import_graph(src)
+    assert graph["signorini.a"] == {"signorini.b"} and graph["signorini.d"] == set()
+    assert import_cycles(graph) == [["signorini.a", "signorini.b", "signorini.c"]]
 
 
 def test_package_inits_import_nothing():

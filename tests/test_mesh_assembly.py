@@ -11,17 +11,20 @@ from skfem import BilinearForm, CellBasis, ElementTriP1, LinearForm
 from skfem.helpers import dot, grad
 
 from signorini.fem.assembly import (
+    CHUNK_ELEMENTS,
     INTORDER,
+    _reaction_diffusion,
     assemble,
     assemble_bilinear_form,
     assemble_linear_form,
     chunk_bases,
+    fk_system_matrix,
     load_vector,
     p1_basis,
     system_matrix,
 )
 from signorini.fem.discrete import build, interpolate_fk
-from signorini.fem.mesh import DIAGONALS, boundary_nodes, friedrichs_keller, mesh_width
+from signorini.fem.mesh import DIAGONALS, boundary_nodes, fk_boundary_nodes, friedrichs_keller, mesh_width
 from signorini.fem.problem import Problem
 
 SIZES = [1, 2, 3, 8]
@@ -397,3 +400,79 @@ def test_build_bundles_a_consistent_discrete_problem():
     A, b = assemble(friedrichs_keller(9, "nw_se"), problem)
     assert abs(disc.A - A).max() == 0.0
     np.testing.assert_array_equal(disc.b, b)
+
+
+# ---------------------------------------------------------------------------------
+# the Friedrichs–Keller stencil and the streamed load vector: the scikit-fem route, bit for bit
+# ---------------------------------------------------------------------------------
+
+
+def _same_bits(x: np.ndarray, y: np.ndarray) -> bool:
+    return x.dtype == y.dtype and x.shape == y.shape and np.array_equal(x.view(np.uint8), y.view(np.uint8))
+
+
+@pytest.mark.parametrize("c", [0.0, 1.0, 2.5, 1e-3])
+@pytest.mark.parametrize("jitter", [0.0, 0.3])
+@pytest.mark.parametrize("diagonal", DIAGONALS)
+@pytest.mark.parametrize("N", [1, 2, 3, 5, 17, 60])
+def test_fk_system_matrix_is_the_scikit_fem_matrix_bit_for_bit(N, diagonal, jitter, c):
+    """Values (round-off of the linspace coordinates included), sparsity, index types; c = 0 drops
+    the exact zeros of K between the acute vertices as scipy's ``eliminate_zeros`` does; bands of
+    1 and 3 grid lines cut the mesh into pieces of every vertex class."""
+    mesh = friedrichs_keller(N, diagonal, jitter=jitter)
+    ref = system_matrix(p1_basis(mesh, intorder=2), c)
+    for band in (1, 3, 64):
+        A = fk_system_matrix(mesh, N, c, band)
+        assert A.shape == ref.shape and A.has_canonical_format
+        for part in ("indptr", "indices", "data"):
+            assert _same_bits(getattr(A, part), getattr(ref, part)), (part, band)
+
+
+def test_fk_system_matrix_rejects_a_mesh_of_another_size():
+    with pytest.raises(ValueError, match="Friedrichs–Keller"):
+        fk_system_matrix(friedrichs_keller(4), 5, 1.0)
+
+
+def test_scipy_sums_duplicates_in_an_order_that_matters():
+    """Why the stencil follows scipy's summation order: the sums of the 18 triplets of an interior
+    row in plain COO order differ from scipy's in the last bit for some entries (N = 60)."""
+    mesh = friedrichs_keller(60)
+    ref = system_matrix(p1_basis(mesh, intorder=2), 1.0)
+    idx, data, shape, _ = _reaction_diffusion._assemble(p1_basis(mesh, intorder=2), c=1.0)
+    order = np.lexsort((idx[1], idx[0]))  # stable: COO order within an entry
+    key = idx[0][order].astype(np.int64) * shape[1] + idx[1][order]
+    starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
+    runs = np.split(data[order], starts[1:])
+    plain = np.array([sum(run[1:].tolist(), run[0]) for run in runs])  # left to right
+    assert np.array_equal(np.abs(plain - ref.data) <= 1e-15, np.ones(ref.nnz, dtype=bool))
+    assert (plain != ref.data).any()
+
+
+@pytest.mark.parametrize("chunk", [7, 1000, CHUNK_ELEMENTS])
+@pytest.mark.parametrize("jitter", [0.0, 0.3])
+@pytest.mark.parametrize("diagonal", DIAGONALS)
+@pytest.mark.parametrize("N", [1, 4, 30])
+def test_load_vector_is_the_scikit_fem_linear_form_bit_for_bit(N, diagonal, jitter, chunk):
+    mesh = friedrichs_keller(N, diagonal, jitter=jitter)
+    for problem in (Problem(), Problem(x0=0.47, c=2.0)):
+        form = LinearForm(lambda v, w, problem=problem: problem.f(w.x) * v)
+        assert _same_bits(load_vector(mesh, problem, chunk), assemble_linear_form(mesh, form, chunk))
+        basis = p1_basis(mesh, intorder=16)  # a basis as target: its rule
+        assert _same_bits(load_vector(basis, problem, chunk), assemble_linear_form(basis, form, chunk))
+
+
+@pytest.mark.parametrize("N", [1, 2, 7, 40])
+def test_fk_boundary_nodes_are_the_mesh_boundary_nodes(N):
+    for diagonal in DIAGONALS:
+        assert _same_bits(fk_boundary_nodes(N), boundary_nodes(friedrichs_keller(N, diagonal)))
+
+
+@pytest.mark.parametrize("diagonal", DIAGONALS)
+def test_build_is_the_scikit_fem_assembly_bit_for_bit(diagonal):
+    problem = Problem(x0=0.47, c=1.5)
+    disc = build(problem, 23, diagonal)
+    A, b = assemble(friedrichs_keller(23, diagonal), problem)
+    for part in ("indptr", "indices", "data"):
+        assert _same_bits(getattr(disc.A, part), getattr(A, part))
+    assert _same_bits(disc.b, b)
+    assert _same_bits(disc.boundary, boundary_nodes(disc.mesh))

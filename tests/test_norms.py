@@ -15,12 +15,9 @@ import numpy as np
 import pytest
 from numpy.polynomial.legendre import leggauss
 
+from signorini.fem.conventions import H12_FORMS, MAX_POINTS, QUADRATURES, W1P_FORMS
 from signorini.fem.mesh import friedrichs_keller
 from signorini.fem.norms import (
-    H12_FORMS,
-    MAX_POINTS,
-    QUADRATURES,
-    W1P_FORMS,
     Conventions,
     UnknownNormError,
     boundary_h1_seminorm,

@@ -16,11 +16,12 @@ from scipy.integrate import quad
 from scipy.optimize import minimize_scalar
 
 from signorini.fem.boundary import boundary_rule
+from signorini.fem.discrete import build
 from signorini.fem.mesh import friedrichs_keller
 from signorini.fem.norm_names import UnknownNormError, parse_norm_name, true_name
 from signorini.fem.norms import Conventions, boundary_error, evaluate_norms, parse_norm
 from signorini.fem.problem import Problem
-from signorini.fem.true_norms import RTOL, true_norm
+from signorini.fem.true_norms import RTOL, evaluate_named_norms, true_norm
 from signorini.paper import label_md
 
 X0 = 0.5 + 0.3 / 7  # inside a bottom boundary edge of the N = 7 mesh, not at its midpoint
@@ -153,12 +154,37 @@ def test_malformed_true_names_are_rejected(name):
         parse_norm_name(name)
 
 
-def test_a_true_name_is_no_error_field_function_but_evaluate_norms_takes_it():
-    with pytest.raises(UnknownNormError, match="evaluate_norms"):
+def test_a_true_name_is_evaluated_by_the_dispatcher_not_under_the_conventions():
+    with pytest.raises(UnknownNormError, match="true_norms"):
         parse_norm("L4_true")
     mesh, problem = friedrichs_keller(7), Harmonic()
-    out = evaluate_norms(problem, mesh, np.zeros(mesh.p.shape[1]), ["L4", "L4_true"])
-    assert out["L4_true"] == true_norm(problem, mesh, np.zeros(mesh.p.shape[1]), "L4").value
+    zero = np.zeros(mesh.p.shape[1])
+    with pytest.raises(UnknownNormError, match="evaluate_named_norms"):
+        evaluate_norms(problem, mesh, zero, ["L4", "L4_true"])
+    out = evaluate_named_norms(problem, mesh, zero, ["L4_true", "L4"])
+    assert list(out) == ["L4_true", "L4"]  # the order asked for
+    assert out["L4_true"] == true_norm(problem, mesh, zero, "L4").value
+    assert out["L4"] == evaluate_norms(problem, mesh, zero, ["L4"])["L4"]
+    detailed = evaluate_named_norms(problem, mesh, zero, ["L4_true", "L4"], details=True)
+    assert detailed["L4_true"].as_dict() == true_norm(problem, mesh, zero, "L4_true").as_dict()
+    assert detailed["L4"] == out["L4"]
+    with pytest.raises(UnknownNormError):
+        evaluate_named_norms(problem, mesh, zero, ["L4", "nonsense"])
+
+
+def test_norms_evaluated_together_are_bit_identical_to_each_alone():
+    """The per-mesh norm job's saving: one error field per chunk and rule for all the norms under
+    the conventions, each value the one the norm alone gives (chunks of 50 triangles: several)."""
+    from signorini.fem.solve import solve_discrete
+
+    disc = build(Problem(), 24)
+    u_h = solve_discrete(disc).u
+    names = ["L2", "L4", "L16", "Linf", "W14", "W116", "W1inf", "H1", "H12", "L2boundary", "L4plus", "L4minus"]
+    for conv in (Conventions(), Conventions(quadrature="dunavant8", linf_points="vertices", w1p_form="gradient")):
+        together = evaluate_norms(Problem(), disc.mesh, u_h, names, conv, chunk=50)
+        for name in names:
+            alone = evaluate_norms(Problem(), disc.mesh, u_h, [name], conv, chunk=50)[name]
+            assert np.float64(together[name]).tobytes() == np.float64(alone).tobytes(), name
 
 
 # --- integrals with the r^{3/2} singularity ---------------------------------------------------

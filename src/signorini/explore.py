@@ -166,7 +166,7 @@ class Scene:
     @cached_property
     def conventions(self):
         """The norm conventions the scene's norm jobs used (from a norm JSON), else the defaults."""
-        from signorini.fem.norms import Conventions
+        from signorini.fem.conventions import Conventions
 
         for path in sorted((self.dir / f"N{self.Ns[0]}" / "norms").glob("*.json")):
             return Conventions(**load_json(path)["conventions"])
@@ -195,12 +195,12 @@ class Scene:
 
     def norms_for(self, names: Sequence[str], Ns: Sequence[int] | None = None):
         """The named norms of ``u − u_h`` for each ``N`` (DataFrame ``N``, ``h``, names): the
-        pipeline's cached value where a norm job exists, else ``evaluate_norms`` on the cached
-        solution with the scene's conventions."""
+        pipeline's cached value where a norm job exists, else evaluated on the cached
+        solution with the scene's conventions (``fem.true_norms.evaluate_named_norms``)."""
         import pandas as pd
 
         from signorini.fem.mesh import mesh_width
-        from signorini.fem.norms import evaluate_norms
+        from signorini.fem.true_norms import evaluate_named_norms
 
         rows = []
         for N in Ns or self.Ns:
@@ -208,7 +208,7 @@ class Scene:
             missing = [n for n, v in cached.items() if v is None]
             if missing:
                 u_h = self.solution(N)["u"]
-                cached.update(evaluate_norms(self.problem, self.mesh(N), u_h, missing, self.conventions))
+                cached.update(evaluate_named_norms(self.problem, self.mesh(N), u_h, missing, self.conventions))
             rows.append({"N": int(N), "h": mesh_width(int(N)), **{n: cached[n] for n in names}})
         return pd.DataFrame(rows)
 

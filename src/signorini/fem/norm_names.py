@@ -11,7 +11,7 @@
                name above: ``L4_true``, ``Linfplus_true``, ``W1inf_true``, ``H12_true``
 =============  =====================================================================
 
-A name without the suffix is evaluated with the paper's conventions (``fem.norms.Conventions``:
+A name without the suffix is evaluated with the paper's conventions (``fem.conventions.Conventions``:
 fixed rules and point sets); with it, to a relative accuracy of about 1e-4 with an error estimate.
 
 ``parse_norm_name`` is the only parser: the norms (``fem.norms``), the exact norms of a P1

@@ -16,58 +16,30 @@ Gauss points of the boundary edges.  A norm is requested by name:
 ``L4plus`` / ``L4minus``  ``‖(u - u_h)^±‖_{L⁴}``; any ``Lp`` works with the suffixes
 =========  =====================================================================
 
-These are the paper's conventions (fixed rules and point sets).  The same norms evaluated to a
-stated accuracy, with an error estimate, are the ``<name>_true`` norms of ``fem.true_norms``
-(``evaluate_norms`` accepts both).
+These are the paper's conventions (``fem.conventions``: fixed rules and point sets).  The same
+norms evaluated to a stated accuracy, with an error estimate, are the ``<name>_true`` norms of
+``fem.true_norms`` (whose ``evaluate_named_norms`` takes a list of both kinds).
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from signorini.fem.boundary import boundary_rule
+from signorini.fem.conventions import Conventions
 from signorini.fem.norm_names import UnknownNormError, parse_norm_name
 from signorini.fem.problem import Problem
-from signorini.fem.quadrature import TRIANGLE_RULES, dunavant8, stroud_conical
+from signorini.fem.quadrature import dunavant8, stroud_conical
 
 if TYPE_CHECKING:  # scikit-fem costs 0.5 s to import; only type hints need it here
     from skfem import MeshTri
 
-QUADRATURES = TRIANGLE_RULES
-W1P_FORMS = ("components", "gradient", "seminorm")
-MAX_POINTS = ("vertices", "midpoints", "quadrature", "all")
-H12_FORMS = ("geometric_full", "geometric_semi")
 BOUNDARY_POINTS = 8  # Gauss–Legendre points per piece of a boundary edge (fem.boundary)
 
 __all__ = ["Conventions", "ErrorField", "UnknownNormError", "error_field", "evaluate_norms", "parse_norm"]
-
-
-@dataclass(frozen=True)
-class Conventions:
-    """The choices the paper leaves open (see the README for the evidence behind the defaults)."""
-
-    quadrature: str = "stroud4_acute1"
-    w1p_form: str = "components"
-    linf_points: str = "all"
-    w1inf_points: str = "quadrature"
-    h12_form: str = "geometric_full"
-
-    def __post_init__(self) -> None:
-        for name, allowed in (
-            ("quadrature", QUADRATURES),
-            ("w1p_form", W1P_FORMS),
-            ("linf_points", MAX_POINTS),
-            ("w1inf_points", MAX_POINTS),
-            ("h12_form", H12_FORMS),
-        ):
-            if getattr(self, name) not in allowed:
-                raise ValueError(f"unknown convention {name}={getattr(self, name)!r}; choose one of {allowed}")
-
-    def as_dict(self) -> dict[str, str]:
-        return asdict(self)
 
 
 @dataclass
@@ -315,10 +287,10 @@ def h12_interpolation_norm(f: ErrorField) -> float:
 
 def parse_norm(name: str):
     """Map a norm name (``fem.norm_names``) to a function of an ``ErrorField``; raises ``UnknownNormError``
-    (also for a ``_true`` name: those are evaluated by ``evaluate_norms`` / ``fem.true_norms``)."""
+    (also for a ``_true`` name: those are evaluated by ``fem.true_norms``)."""
     spec = parse_norm_name(name)
     if spec.true:
-        raise UnknownNormError(f"{name!r} is not a function of an error field: evaluate it with evaluate_norms")
+        raise UnknownNormError(f"{name!r} is not a function of an error field: evaluate it with fem.true_norms")
     if spec.family == "H12":
         return h12_interpolation_norm
     if spec.family == "H1":
@@ -356,16 +328,17 @@ def evaluate_norms(
     conventions: Conventions | None = None,
     chunk: int = CHUNK_ELEMENTS,
 ) -> dict[str, float]:
-    """The named norms of ``u - u_h``, evaluated over chunks of triangles (bounded memory); a
-    ``_true`` name by ``fem.true_norms.true_norm`` (its value; the error estimate is dropped)."""
+    """The named norms of ``u - u_h`` under the conventions, evaluated over chunks of triangles
+    (bounded memory).  All names share the evaluations of one chunk: ``e`` and ``∇e`` at the points
+    of each rule are computed once for all the norms that need them, and each value is the one the
+    name alone gives, bit for bit.  A ``_true`` name raises ``UnknownNormError``: those are
+    evaluated by ``fem.true_norms`` (``evaluate_named_norms`` takes both kinds)."""
     true = [name for name in names if parse_norm_name(name).true]
     if true:
-        from signorini.fem.true_norms import true_norm
-
-        rest = [name for name in names if name not in true]
-        out = evaluate_norms(problem, mesh, u_h, rest, conventions, chunk) if rest else {}
-        out |= {name: true_norm(problem, mesh, u_h, name, conventions).value for name in true}
-        return {name: out[name] for name in names}
+        raise UnknownNormError(
+            f"{true}: a _true norm is evaluated to a stated accuracy by fem.true_norms "
+            "(true_norm, or evaluate_named_norms for a mixed list), not under the conventions"
+        )
     reductions = {name: _reduction(name) for name in names}
     cell = [n for n, (kind, _) in reductions.items() if kind != "boundary"]
     boundary = [n for n, (kind, _) in reductions.items() if kind == "boundary"]

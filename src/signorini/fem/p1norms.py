@@ -13,14 +13,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from signorini.fem.conventions import Conventions
 from signorini.fem.norm_names import NormName, parse_norm_name
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
 
     from skfem import MeshTri
-
-    from signorini.fem.norms import Conventions
 
 
 def _complete_homogeneous(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray, p: int) -> np.ndarray:
@@ -135,8 +134,6 @@ def p1_norms(
     not matter: the maxima of a P1 function are attained at vertices.  ``plus``/``minus``
     parts are not supported.
     """
-    from signorini.fem.norms import Conventions
-
     conv = conventions or Conventions()
     specs = [parse_norm_name(name) for name in names]  # unknown names raise UnknownNormError
     v = np.asarray(v, dtype=float)

@@ -32,12 +32,13 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from signorini.fem.boundary import singular_points
+from signorini.fem.conventions import Conventions
 from signorini.fem.norm_names import parse_norm_name
 from signorini.fem.norms import (
-    Conventions,
     ErrorField,
     boundary_error,
     boundary_l2_norm,
+    evaluate_norms,
     h12_interpolation_norm,
     power_scale,
 )
@@ -270,6 +271,29 @@ def true_norm(
     if spec.is_max:
         return _max_norm(problem, mesh, u_h, spec, conv, rtol)
     return _integral_norm(problem, mesh, u_h, spec, conv, rtol)
+
+
+def evaluate_named_norms(
+    problem,
+    mesh: MeshTri,
+    u_h: np.ndarray,
+    names: list[str],
+    conventions: Conventions | None = None,
+    details: bool = False,
+) -> dict[str, float] | dict[str, float | TrueNorm]:
+    """Every named norm of ``u − u_h``, the one dispatcher between the two kinds: the names under
+    the conventions in one pass of ``fem.norms.evaluate_norms`` (each chunk's error field shared
+    by all of them; each value the one the name alone gives, bit for bit), and every
+    ``<name>_true`` by ``true_norm``.  The values as floats; with ``details``, a ``_true`` name
+    maps to its ``TrueNorm`` (value, error estimate, levels)."""
+    specs = {name: parse_norm_name(name) for name in names}  # unknown names fail before any work
+    plain = [name for name in names if not specs[name].true]
+    out: dict = dict(evaluate_norms(problem, mesh, u_h, plain, conventions)) if plain else {}
+    for name in names:
+        if specs[name].true:
+            result = true_norm(problem, mesh, u_h, name, conventions)
+            out[name] = result if details else result.value
+    return {name: out[name] for name in names}
 
 
 # --- maxima -------------------------------------------------------------------------------

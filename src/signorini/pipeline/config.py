@@ -106,7 +106,7 @@ def check_config(config: Mapping, mem_limit_mb: int | None = None, node: NodeLim
     if node is not None:
         limit = min(limit, node.mem_mb) if mem_limit_mb else node.mem_mb
         available = f"of the largest node of Slurm partition {node.partition}"
-    from signorini.fem.norms import Conventions
+    from signorini.fem.conventions import Conventions
     from signorini.fem.problem import Problem, ProblemParameterError
 
     scenes = config.get("scenes") or {}

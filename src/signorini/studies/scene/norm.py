@@ -1,6 +1,7 @@
 """Stage ``norm``: norms of ``u − u_h`` on one mesh of a scene.  By default one job per norm, so
 that a target computes only the norms it needs; with ``norm_jobs: per_mesh`` one job computes all
-of a scene's norms on a mesh (fewer, longer jobs for a cluster), through the same function."""
+of a scene's norms on a mesh (fewer, longer jobs for a cluster), through the same function: there
+the norms under the conventions share one evaluation of the error field per chunk and rule."""
 
 from __future__ import annotations
 
@@ -12,8 +13,9 @@ from collections.abc import Mapping
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
+from signorini.fem.conventions import Conventions
 from signorini.fem.norm_names import parse_norm_name
-from signorini.fem.norms import Conventions, evaluate_norms
+from signorini.fem.true_norms import evaluate_named_norms
 from signorini.pipeline.artifacts import save_json
 from signorini.studies.scene.store import SceneMesh
 
@@ -22,7 +24,30 @@ if TYPE_CHECKING:
     from skfem import MeshTri
 
 log = logging.getLogger(__name__)
-TIMINGS_NOTE = "perf_counter timers inside the job: mesh = building the mesh, norm = error evaluation + reduction"
+TIMINGS_NOTE = (
+    "perf_counter timers inside the job: mesh = building the mesh, norm = error evaluation + reduction "
+    "(for the norms of norm_shared_by together: one evaluation of the error field shared by them)"
+)
+
+
+def _evaluate(at: SceneMesh, mesh, u_h, names: list[str], conv: Conventions) -> dict[str, tuple]:
+    """{name: (value, accuracy or None, seconds, names sharing the evaluation)}: the names under
+    the conventions in one call of the dispatcher (one error field), each ``_true`` name alone."""
+    plain = [name for name in names if not parse_norm_name(name).true]
+    groups = ([plain] if plain else []) + [[name] for name in names if name not in plain]
+    out = {}
+    for group in groups:
+        t1 = time.perf_counter()
+        results = evaluate_named_norms(at.problem, mesh, u_h, group, conv, details=True)
+        seconds = time.perf_counter() - t1
+        for name, result in results.items():
+            if isinstance(result, float):
+                out[name] = (result, None, seconds, group)
+            else:
+                accuracy = {k: v for k, v in result.as_dict().items() if k not in ("name", "value")}
+                out[name] = (result.value, accuracy, seconds, group)
+    return out
+
 # The uncertainty of a value is this multiple of the same norm of the algebraic error δ: δ is the
 # first-order estimate from this run's KKT residual, and on another processor u_h moves by a
 # different round-off of the same size (measured: 200x below the estimate at N = 501)
@@ -41,18 +66,24 @@ def uncertainty_norm(norm: str) -> str:
     return spec.base.removesuffix(spec.part) if spec.part else spec.base
 
 
-def algebraic_uncertainty(at: SceneMesh, mesh: MeshTri, delta: np.ndarray, norm: str, conv: Conventions) -> dict:
-    """The norm of the algebraic error ``δ`` (a P1 function: the error of ``-δ`` against ``u ≡ 0``)
-    that bounds how far round-off can move the value of ``norm``, and the uncertainty recorded."""
+def algebraic_uncertainties(
+    at: SceneMesh, mesh: MeshTri, delta: np.ndarray, norms: list[str], conv: Conventions
+) -> dict[str, dict]:
+    """{norm: the norm of the algebraic error ``δ`` (a P1 function: the error of ``-δ`` against
+    ``u ≡ 0``) that bounds how far round-off can move the value of ``norm``, and the uncertainty
+    recorded}; the norms of ``δ`` are evaluated together (one error field)."""
     zero = replace(at.problem, A=0.0)  # u ≡ 0, same free point: the same boundary pieces
-    name = uncertainty_norm(norm)
-    estimate = float(evaluate_norms(zero, mesh, -delta, [name], conv)[name])
+    names = {norm: uncertainty_norm(norm) for norm in norms}
+    values = evaluate_named_norms(zero, mesh, -delta, list(dict.fromkeys(names.values())), conv)
     return {
-        "estimate": estimate,
-        "norm": name,
-        "safety": UNCERTAINTY_SAFETY,
-        "uncertainty": UNCERTAINTY_SAFETY * estimate,
-        "note": UNCERTAINTY_NOTE,
+        norm: {
+            "estimate": float(values[name]),
+            "norm": name,
+            "safety": UNCERTAINTY_SAFETY,
+            "uncertainty": UNCERTAINTY_SAFETY * float(values[name]),
+            "note": UNCERTAINTY_NOTE,
+        }
+        for norm, name in names.items()
     }
 
 
@@ -63,12 +94,14 @@ def norms_stage(
     conventions: Mapping,
 ) -> dict[str, dict]:
     """Norms of ``u - u_h`` on one mesh of a scene, each saved to its own JSON (``outputs``:
-    norm name -> path) with its value and timing, one after another on one mesh built once (each
-    value is the one a job of that norm alone computes).  A ``_true`` norm (``fem.true_norms``)
-    also saves its estimated quadrature error and refinement levels.  With the solve artifact's
-    ``algebraic_error`` each artifact also records how far round-off in ``u_h`` can move its value
-    (``algebraic_error``: ``algebraic_uncertainty``), from which the tables take their digits."""
-    specs = {norm: parse_norm_name(norm) for norm in outputs}  # fail before any work on an unknown name
+    norm name -> path) with its value and timing, on one mesh built once: the norms under the
+    conventions together (``fem.true_norms.evaluate_named_norms``: each value the one a job of that
+    norm alone computes, bit for bit), then each ``_true`` norm, which also saves its estimated
+    quadrature error and refinement levels.  With the solve artifact's ``algebraic_error`` each
+    artifact also records how far round-off in ``u_h`` can move its value (``algebraic_error``:
+    ``algebraic_uncertainties``), from which the tables take their digits."""
+    for norm in outputs:
+        parse_norm_name(norm)  # fail before any work on an unknown name
     conv = Conventions(**dict(conventions))
     solution = at.solution(solution_npz)
     u_h, delta = solution["u"], solution.get("algebraic_error")
@@ -77,24 +110,18 @@ def norms_stage(
     mesh_s = time.perf_counter() - t0
     shared = {"mesh_shared_by": list(outputs)} if len(outputs) > 1 else {}
     infos = {}
-    for norm, out_json in outputs.items():
-        t1 = time.perf_counter()
-        accuracy = None
-        if specs[norm].true:
-            from signorini.fem.true_norms import true_norm
-
-            result = true_norm(at.problem, mesh, u_h, norm, conv)
-            value = result.value
-            accuracy = {k: v for k, v in result.as_dict().items() if k not in ("name", "value")}
-        else:
-            value = evaluate_norms(at.problem, mesh, u_h, [norm], conv)[norm]  # chunked: bounded memory
-        norm_s = time.perf_counter() - t1
+    values = _evaluate(at, mesh, u_h, list(outputs), conv)
+    uncertainties = {} if delta is None else algebraic_uncertainties(at, mesh, delta, list(outputs), conv)
+    for norm, (value, accuracy, norm_s, group) in values.items():
         if not math.isfinite(value) or value < 0.0:
             raise ValueError(
                 f"N={at.N} {norm} = {value}: not a finite non-negative number (overflow or NaN in u - u_h)"
             )
-        algebraic = None if delta is None else algebraic_uncertainty(at, mesh, delta, norm, conv)
+        algebraic = uncertainties.get(norm)
         log.info("N=%d %s = %.6e (mesh %.2f s, norm %.3f s)", at.N, norm, value, mesh_s, norm_s)
+        timings = {"mesh_s": mesh_s, "norm_s": norm_s, **shared}
+        if len(group) > 1:
+            timings["norm_shared_by"] = group
         infos[norm] = {
             "N": at.N,
             "h": at.h,
@@ -104,9 +131,9 @@ def norms_stage(
             **({"quadrature_error": accuracy} if accuracy else {}),
             **({"algebraic_error": algebraic} if algebraic else {}),
             "diagonal": at.diagonal,
-            "timings": {"mesh_s": mesh_s, "norm_s": norm_s, **shared, "note": TIMINGS_NOTE},
+            "timings": {**timings, "note": TIMINGS_NOTE},
         }
-        save_json(out_json, infos[norm])
+        save_json(outputs[norm], infos[norm])
     return infos
 
 

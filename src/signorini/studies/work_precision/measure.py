@@ -254,8 +254,8 @@ class _Inputs:
 
 def _load_inputs(at: SceneMesh, inputs: Mapping[str, Any], conventions: Mapping | None) -> _Inputs:
     """The source scene's system, exact solution and norm values (``inputs``, see ``measure_stage``)."""
+    from signorini.fem.conventions import Conventions
     from signorini.fem.discrete import DiscreteProblem
-    from signorini.fem.norms import Conventions
 
     disc_err = {name: read_norm(path, name, at.N) for name, path in inputs["disc"].items()}
     A, b, boundary = load_system(inputs["system"], at.N)
