@@ -18,7 +18,10 @@ from signorini.paper import FIGURE3_NORMS, error_label_tex, expected_rate
 from signorini.plotting import new_figure, save, style, styled
 
 MARKERS = {"L4": "o", "W14": "s"}
-FIELD_DIGITS = 10  # u and f are exact functions: the libm's last bits are all that can differ
+# u and f are exact functions: only a libm's last bits can differ between processors; 6 digits are
+# far below a pixel, and a last-bit change crosses a rounding boundary of one of the 2 · 161² values
+# with probability ~1e-5 (10 digits: ~0.1, and the PDF writes coordinates to 10 decimals)
+FIELD_DIGITS = 6
 
 
 @styled
