@@ -43,3 +43,31 @@ def test_expected_rate_of_every_family_of_the_grammar(norm, order):
     assert got == (pytest.approx(order) if order is not None else None)
     if norm in THEORETICAL_ORDERS:
         assert math.isclose(THEORETICAL_ORDERS[norm], got)
+
+
+@pytest.mark.slow
+def test_a_scene_reads_through_the_store_and_shows_the_tables_cells(built_repo, tmp_path):
+    """``Scene`` reads what the stages read, with their checks, and its tables are the cells of
+    the committed tables (the built copy renders paper_figures/ from the smoke scene)."""
+    import numpy as np
+    import pandas as pd
+    from helpers import clone_built
+
+    from signorini.pipeline.artifacts import CorruptArtifactError, load_npz, save_npz
+
+    scene = explore.Scene("smoke", built_repo)
+    for table in (1, 2):
+        ours = explore.ours_table(scene, table)
+        written = pd.read_csv(built_repo / f"paper_figures/table{table}.csv", index_col="h")
+        rows = [lab for lab in ours.index if lab != "theo."]
+        np.testing.assert_array_equal(ours.loc[rows].to_numpy(), written.loc[rows, ours.columns].to_numpy(dtype=float))
+    assert scene.cached_norm(21, "L4") == pytest.approx(explore.ours_table(scene, 1).loc["1/21", "L4"], rel=1e-4)
+    fields = scene.fields()
+    assert set(fields) >= {"x", "y", "u", "f"}
+    # a solution of another mesh under this mesh's name is refused, as the stages refuse it
+    repo = clone_built(built_repo, tmp_path / "repo")
+    path = repo / "results/smoke/N21/solution.npz"
+    other = load_npz(repo / "results/smoke/N11/solution.npz")
+    save_npz(path, **{k: v for k, v in other.items() if not k.startswith("_")})
+    with pytest.raises(CorruptArtifactError):
+        explore.Scene("smoke", repo).solution(21)

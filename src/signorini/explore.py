@@ -30,11 +30,11 @@ import numpy as np
 
 from signorini.fem.mesh import DEFAULT_DIAGONAL
 from signorini.fem.problem import Problem
-from signorini.pipeline.artifacts import load_json, load_npz
+from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz
 from signorini.pipeline.cache import artifact_ok
 from signorini.pipeline.paths import PATHS, REFERENCES
-from signorini.studies.paper.sample import GRID
-from signorini.studies.scene.store import read_errors_csv
+from signorini.studies.paper.sample import sample_fields
+from signorini.studies.scene.store import SceneMesh, read_errors_csv, read_norm, read_uncertainties
 
 ROOT_ENV = "SIGNORINI_ROOT"
 SCENE_ENV = "SIGNORINI_SCENE"
@@ -148,16 +148,26 @@ class Scene:
         """``solution.json``: certificate, iterations, timers, problem parameters."""
         return load_json(_path(self.root, "solution_json", self.name, N=N))
 
+    @cached_property
+    def problem_params(self) -> dict:
+        """The problem block the scene's solve jobs recorded (scenes added with ``--configfile`` too)."""
+        return dict(self.solution_info(self.Ns[0])["problem"])
+
+    def at(self, N: int) -> SceneMesh:
+        """The scene's mesh ``N`` as the pipeline's stages see it (``studies.scene.store``)."""
+        return SceneMesh(self.problem_params, int(N), self.diagonal)
+
     def solution(self, N: int) -> dict[str, np.ndarray]:
-        """``solution.npz`` (checksum verified): ``u`` (nodal values), ``lam`` (one entry per
-        boundary node, sorted as ``mesh.boundary_nodes``), ``active`` (contact nodes)."""
+        """``solution.npz``, read through the store (checksum, size, diagonal and problem checked):
+        ``u`` (nodal values), ``lam`` (one entry per boundary node, sorted as
+        ``mesh.boundary_nodes``), ``active`` (contact nodes)."""
         if N not in self._solutions:
-            self._solutions[N] = load_npz(_path(self.root, "solution_npz", self.name, N=N))
+            self._solutions[N] = self.at(N).solution(_path(self.root, "solution_npz", self.name, N=N))
         return self._solutions[N]
 
     @cached_property
     def problem(self) -> Problem:
-        return Problem(**self.solution_info(self.Ns[0])["problem"])
+        return Problem.from_params(self.problem_params)
 
     @cached_property
     def diagonal(self) -> str:
@@ -173,25 +183,30 @@ class Scene:
         return Conventions()
 
     def mesh(self, N: int):
-        from signorini.fem.mesh import friedrichs_keller
+        return self.at(N).mesh()
 
-        return friedrichs_keller(int(N), self.diagonal)
+    def norm_json(self, N: int, norm: str) -> Path:
+        return _path(self.root, "norm_json", self.name, N=N, norm=norm)
 
     def cached_norm(self, N: int, norm: str) -> float | None:
-        """The value of a norm job's artifact, if that norm was computed by the pipeline."""
-        path = _path(self.root, "norm_json", self.name, N=N, norm=norm)
-        return float(load_json(path)["value"]) if path.exists() else None
+        """The value of a norm job's artifact (read through the store, checked), if that norm was
+        computed by the pipeline."""
+        path = self.norm_json(N, norm)
+        return read_norm(path, norm, N) if path.exists() else None
+
+    def uncertainties(self, norms: Sequence[str]):
+        """The norms' algebraic-error uncertainties per mesh (the frame of ``read_uncertainties``),
+        or None where an artifact records none (the tables then print the paper's digits)."""
+        try:
+            return read_uncertainties(self.Ns, {n: [self.norm_json(N, n) for N in self.Ns] for n in norms})
+        except (OSError, CorruptArtifactError):
+            return None
 
     def fields(self) -> dict[str, np.ndarray]:
         """``u`` and ``f`` on a grid (Figure 2's data): ``fields.npz`` if the pipeline sampled it,
-        else evaluated on the same grid through ``Problem``."""
+        else ``sample_fields``, the sample stage's own function."""
         path = _path(self.root, "fields_npz", self.name)
-        if path.exists():
-            return load_npz(path)
-        t = np.linspace(0.0, 1.0, GRID)
-        X, Y = np.meshgrid(t, t, indexing="xy")
-        x = np.stack([X, Y])
-        return {"x": X, "y": Y, "u": self.problem.u(x), "f": self.problem.f(x)}
+        return load_npz(path) if path.exists() else sample_fields(self.problem)
 
     def norms_for(self, names: Sequence[str], Ns: Sequence[int] | None = None):
         """The named norms of ``u − u_h`` for each ``N`` (DataFrame ``N``, ``h``, names): the
@@ -234,7 +249,7 @@ def published_mismatch(
     the paper's problem (``Problem()``) on its triangulation (``DEFAULT_DIAGONAL``) under the
     default norm conventions on the meshes of its tables (``paper_Ns``): another problem or other
     meshes give other numbers, which a table next to the paper's would pass off as comparable."""
-    from signorini.fem.norms import Conventions
+    from signorini.fem.conventions import Conventions
 
     if problem != Problem():
         return f"its problem {problem.as_dict()} is not the paper's {Problem().as_dict()}"
@@ -255,21 +270,25 @@ def scene_published_mismatch(scene: Scene) -> str | None:
 
 
 def ours_table(scene: Scene, table: int):
-    """Our Table 1 (errors) or Table 2 (EOCs, ``regr.``, ``theo.``) of a scene, indexed like the paper's."""
+    """Our Table 1 (errors) or Table 2 (EOCs, ``regr.``, ``theo.``) of a scene, indexed like the
+    paper's: the cells of the pipeline's tables (``studies.paper.tables``), with their digits."""
     import pandas as pd
 
-    from signorini.formatting import h_label
     from signorini.paper import TABLE1_NORMS, TABLE2_NORMS, expected_rate
+    from signorini.studies.paper.tables import eoc_rows, eoc_uncertainties, error_rows
 
+    errors = scene.errors()
+    norms = [n for n in (TABLE1_NORMS if table == 1 else TABLE2_NORMS) if n in errors.columns]
+    uncertainties = scene.uncertainties(norms)
     if table == 1:
-        df = scene.errors()
-        norms = [n for n in TABLE1_NORMS if n in df.columns]
-        return pd.DataFrame(df[norms].to_numpy(), index=[h_label(N) for N in df["N"]], columns=norms)
-    df = scene.eoc()
-    norms = [n for n in TABLE2_NORMS if n in df.columns]
-    labels = ["regr." if str(N) == "regression" else h_label(N) for N in df["N"]]
-    out = pd.DataFrame(df[norms].to_numpy(dtype=float), index=labels, columns=norms)
-    out.loc["theo."] = [expected_rate(n) for n in norms]
+        labels, rows = error_rows(errors, uncertainties, norms)
+    else:
+        per_row = None if uncertainties is None else eoc_uncertainties(errors, uncertainties, norms)
+        labels, rows = eoc_rows(scene.eoc(), per_row, norms)
+        rows = [[(round(v, k), k) for v, k in row] for row in rows]
+    out = pd.DataFrame([[v for v, _ in row] for row in rows], index=labels, columns=norms, dtype=float)
+    if table == 2:
+        out.loc["theo."] = [expected_rate(n) for n in norms]
     return out
 
 

@@ -13,10 +13,14 @@ from signorini.pipeline.artifacts import save_npz
 GRID = 161  # points per side
 
 
-def sample_stage(problem_params: Mapping, n: int, out_npz: str | os.PathLike) -> None:
-    """``u`` and ``f`` on an ``n × n`` grid of the unit square."""
-    problem = Problem.from_params(problem_params)
+def sample_fields(problem: Problem, n: int = GRID) -> dict[str, np.ndarray]:
+    """``x``, ``y`` and ``u``, ``f`` on an ``n × n`` grid of the unit square."""
     t = np.linspace(0.0, 1.0, int(n))
     X, Y = np.meshgrid(t, t, indexing="xy")
     x = np.stack([X, Y])
-    save_npz(out_npz, x=X, y=Y, u=problem.u(x), f=problem.f(x))
+    return {"x": X, "y": Y, "u": problem.u(x), "f": problem.f(x)}
+
+
+def sample_stage(problem_params: Mapping, n: int, out_npz: str | os.PathLike) -> None:
+    """Stage ``sample``: ``sample_fields`` of the scene's problem, saved."""
+    save_npz(out_npz, **sample_fields(Problem.from_params(problem_params), n))

@@ -81,6 +81,28 @@ def certified_errors(errors, uncertainties, norms: Sequence[str]) -> tuple[list[
     return values, digits
 
 
+def error_rows(errors, uncertainties, norms: Sequence[str]) -> tuple[list[str], list[list[tuple[float, int]]]]:
+    """Table 1's layout: the row labels (``1/N``) and per row and norm ``(value rounded to its
+    certified digits, those digits)``; every format (and the notebooks) renders these cells."""
+    values, digits = certified_errors(errors, uncertainties, norms)
+    cells = [list(zip(v, d, strict=True)) for v, d in zip(values, digits, strict=True)]
+    return [h_label(N) for N in errors["N"]], cells
+
+
+def eoc_rows(eoc, uncertainty, norms: Sequence[str]) -> tuple[list[str], list[list[tuple[float, int]]]]:
+    """Table 2's layout: the row labels (``1/N`` of the finer mesh, then ``regr.``) and per row and
+    norm ``(EOC, its certified decimals)`` (``uncertainty``: ``eoc_uncertainties``; ``None``: 4)."""
+    labels = ["regr." if str(N) == "regression" else h_label(N) for N in eoc["N"]]
+    cells = [
+        [
+            (float(eoc[n].iloc[i]), certified_decimals(0.0 if uncertainty is None else float(uncertainty[n][i])))
+            for n in norms
+        ]
+        for i in range(len(labels))
+    ]
+    return labels, cells
+
+
 def table1(
     errors,
     out_csv: str | os.PathLike,
@@ -91,9 +113,7 @@ def table1(
     """Table 1 from a frame with columns ``N``, ``h`` and at least ``TABLE1_NORMS``; ``uncertainties``
     (the same shape, ``studies.scene.store.read_uncertainties``) decides each value's digits."""
     _require(errors, TABLE1_NORMS, "Table 1")
-    labels = [h_label(N) for N in errors["N"]]
-    values, digits = certified_errors(errors, uncertainties, TABLE1_NORMS)
-    cells = [list(zip(v, d, strict=True)) for v, d in zip(values, digits, strict=True)]
+    labels, cells = error_rows(errors, uncertainties, TABLE1_NORMS)
     md_rows = [[lab, *(sci_md(v, k - 1) for v, k in row)] for lab, row in zip(labels, cells, strict=True)]
     tex_rows = [[tex_h(lab), *(sci_tex(v, k - 1) for v, k in row)] for lab, row in zip(labels, cells, strict=True)]
     csv_rows = [[lab, *(sig_csv(v, k) for v, k in row)] for lab, row in zip(labels, cells, strict=True)]
@@ -132,14 +152,8 @@ def table2(
     ``uncertainty``: per norm, one uncertainty per row of ``eoc`` (``eoc_uncertainties``) that
     decides its decimals; ``None``: the paper's 4."""
     _require(eoc, TABLE2_NORMS, "Table 2")
-    labels = ["regr." if str(N) == "regression" else h_label(N) for N in eoc["N"]]
-    cells = []
-    for i in range(len(labels)):
-        row = []
-        for n in TABLE2_NORMS:
-            k = certified_decimals(0.0 if uncertainty is None else float(uncertainty[n][i]))
-            row.append(f"{float(eoc[n].iloc[i]):.{k}f}")
-        cells.append(row)
+    labels, rows = eoc_rows(eoc, uncertainty, TABLE2_NORMS)
+    cells = [[f"{v:.{k}f}" for v, k in row] for row in rows]
     theo = [THEORETICAL_ORDERS[n] for n in TABLE2_NORMS]
     first = h_label(min(int(N) for N in scene_N))
     dashes = len(TABLE2_NORMS)
