@@ -170,6 +170,14 @@ def theory_true_norms():
     return norm_jsons(THEORY, names)
 
 
+def target_outputs(target):
+    """Every output of the rules a target rule renders (``paths.TARGETS``, the one list of them);
+    call after those rules are defined."""
+    return [
+        path for rule in paths.TARGETS[target] for path in getattr(rules, rule).output
+    ]
+
+
 def flat(mapping):
     return [p for values in mapping.values() for p in values]
 

@@ -156,18 +156,7 @@ rule runtime:
 
 # what `all` builds: every output of the paper's rules, and the rendered scene's tables
 PAPER_OUTPUTS = [
-    *(
-        path
-        for rule in (
-            "table1",
-            "table2",
-            "figure2",
-            "figure3",
-            "reproduction",
-            "runtime",
-        )
-        for path in getattr(rules, rule).output
-    ),
+    *target_outputs("all"),
     *expand(rules.errors.output.csv, scene=FIG),
     *expand(rules.eoc.output.csv, scene=FIG),
 ]

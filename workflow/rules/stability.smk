@@ -60,5 +60,5 @@ rule stability_atlas:
 rule stability:
     """The stability atlas: paper_figures/stability.{csv,md,pdf,png}."""
     input:
-        rules.stability_atlas.output,
+        target_outputs("stability"),
     localrule: True

@@ -50,5 +50,5 @@ rule theory_report:
 rule theory:
     """The theory scene: paper_figures/theory.{md,csv}, theory_rates.*, theory_extra.*."""
     input:
-        rules.theory_report.output,
+        target_outputs("theory"),
     localrule: True

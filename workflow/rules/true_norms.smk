@@ -25,5 +25,5 @@ rule true_tables:
 rule true_norms:
     """The true norms beside the paper's conventions: paper_figures/table{1,2}_true.{csv,md}."""
     input:
-        rules.true_tables.output,
+        target_outputs("true_norms"),
     localrule: True

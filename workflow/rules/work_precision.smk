@@ -106,7 +106,5 @@ rule work_precision_report:
 rule work_precision:
     """The work-precision study: paper_figures/work_precision.* and cost_of_accuracy.*."""
     input:
-        rules.work_precision_table.output,
-        rules.work_precision_figures.output,
-        rules.work_precision_report.output,
+        target_outputs("work_precision"),
     localrule: True
