@@ -3,11 +3,14 @@ values, tables that lost a row, a scene whose errors vanish, artifacts unreadabl
 
 from __future__ import annotations
 
+import ast
 import os
+import re
 import signal
 import stat
 import subprocess
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,7 +18,7 @@ import yaml
 from helpers import PROBLEM, ROOT
 
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json, save_json
-from signorini.pipeline.cache import artifact_ok, cached_artifacts, corrupt_artifacts, quarantine_corrupt
+from signorini.pipeline.cache import artifact_ok, cached_artifacts, corrupt_artifacts
 from signorini.pipeline.config import ConfigError, check_config
 from signorini.studies.scene.discretise import discretise_stage
 from signorini.studies.scene.eoc import eoc_stage
@@ -57,25 +60,30 @@ def test_a_nan_norm_artifact_never_reaches_a_table(solved, tmp_path):
 
 
 @pytest.mark.parametrize("table, text", [("errors.csv", ERRORS), ("eoc.csv", EOC)])
-def test_a_table_that_lost_a_row_is_caught(tmp_path, table, text):
-    scene = {"N": [11, 21, 41]}
+def test_a_table_that_lost_a_row_is_out_of_date(tmp_path, table, text, capsys):
+    """A complete table without one of the scene's N (``sed -i '3d'``, or the N list changed) is a
+    valid file of another state: removed and rebuilt, and called out of date, not corrupt."""
+    from signorini.pipeline.cache import remove_stale
+
+    scene = {"N": [11, 21, 41], "norms": ["L4"]}
     path = tmp_path / "s" / table
     path.parent.mkdir()
     path.write_text(text)
-    assert not corrupt_artifacts(cached_artifacts(tmp_path, {"s": scene}))
+    assert not remove_stale(cached_artifacts(tmp_path, {"s": scene}), str, execute=True)
     lines = text.splitlines(keepends=True)
-    path.write_text("".join(lines[:2] + lines[3:]))  # sed -i '3d': a complete-looking table without one N
-    assert artifact_ok(path)  # every row is well formed ...
-    assert corrupt_artifacts(cached_artifacts(tmp_path, {"s": scene})) == [str(path)]  # ... but an N is missing
-    assert quarantine_corrupt(cached_artifacts(tmp_path, {"s": scene})) == [str(path)]
-    assert (tmp_path / "s" / f"{table}.corrupt").exists()
+    path.write_text("".join(lines[:2] + lines[3:]))  # a complete-looking table without one N
+    assert artifact_ok(path) and not corrupt_artifacts(cached_artifacts(tmp_path, {"s": scene}))
+    assert remove_stale(cached_artifacts(tmp_path, {"s": scene}), str, execute=True) == [str(path)]
+    err = capsys.readouterr().err
+    assert "out of date" in err and "the scene asks for" in err and "corrupt" not in err
+    assert not path.exists() and not (tmp_path / "s" / f"{table}.corrupt").exists()
 
 
 @pytest.mark.parametrize("value", ["nan", "inf", "-0.5"])
 def test_a_table_with_a_non_finite_or_negative_error_is_caught(tmp_path, value):
     path = tmp_path / "errors.csv"
     path.write_text(ERRORS.replace("0.012", value))
-    assert not artifact_ok(path, ["11", "21", "41"])
+    assert not artifact_ok(path)
 
 
 def test_a_vanishing_error_or_a_single_mesh_stops_the_eoc_job(tmp_path):
@@ -344,3 +352,240 @@ def test_a_run_killed_during_a_job_recovers_bit_for_bit(built_repo, tmp_path, si
     snakemake(repo, "-c1", "results/smoke/N41/solution.npz", "results/smoke/errors.csv")
     assert solution.read_bytes() == before
     assert not list((repo / "results").rglob(".*.tmp"))
+
+
+# --- provenance includes the parameters; words match the state --------------------------------
+
+
+def test_an_artifact_computed_with_other_parameters_is_out_of_date(tmp_path, capsys, monkeypatch):
+    """Its recorded code and inputs are current, only the parameters a job would get now differ
+    (A 10 -> 20): out of date, and so is everything computed from it and the scene's tables."""
+    from signorini.pipeline.artifacts import content_digest, recording
+    from signorini.pipeline.cache import remove_stale, stale_artifacts
+
+    monkeypatch.chdir(tmp_path)  # the workflow names artifacts relative to its directory
+    scene = Path("results/s")
+    system, norm = scene / "N11/system.json", scene / "N11/norms/L4.json"
+    with recording({"rule": "discretise", "code": "c", "params": {"problem": PROBLEM}, "inputs": {}}):
+        save_json(system, {"n": 1})
+    inputs = {str(system): content_digest(system)}
+    with recording({"rule": "norm", "code": "c", "params": {"problem": PROBLEM}, "inputs": inputs}):
+        save_json(norm, {"value": 1.0})
+    (scene / "errors.csv").write_text(ERRORS)
+
+    def cached():
+        return cached_artifacts("results", {"s": {"N": [11, 21, 41], "norms": ["L4"]}})
+
+    def code(rule):
+        return "c"
+
+    assert stale_artifacts(cached(), code, lambda path, prov: {"problem": PROBLEM}) == []
+    now = {"problem": {**PROBLEM, "A": 20}}
+    stale = dict(stale_artifacts(cached(), code, lambda path, prov: now))
+    assert set(stale) == {str(system), str(norm)}
+    assert '"A": 10' in stale[str(system)] and '"A": 20' in stale[str(system)]
+    removed = remove_stale(cached(), code, False, lambda path, prov: now)
+    assert set(removed) == {str(system), str(norm), str(scene / "errors.csv")} and system.exists()  # read-only
+    assert "out of date" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("block", "reason"),
+    [
+        ({"N": [11, 21], "norms": ["L4"]}, "holds the rows N = 11, 21, 41, the scene asks for 11, 21"),
+        ({"N": [11, 21, 41, 81], "norms": ["L4"]}, "the scene asks for 11, 21, 41, 81"),
+        ({"N": [11, 21, 41], "norms": ["L4", "H12"]}, "has the norms L4, the scene asks for L4, H12"),
+        ({"N": [11, 21, 41], "norms": []}, "has the norms L4, the scene asks for none"),
+    ],
+)
+def test_a_table_of_other_meshes_or_norms_is_out_of_date_not_corrupt(tmp_path, capsys, block, reason):
+    from signorini.pipeline.cache import quarantine_corrupt, remove_stale
+
+    (tmp_path / "s").mkdir()
+    (tmp_path / "s/errors.csv").write_text(ERRORS)
+    assert quarantine_corrupt(cached_artifacts(tmp_path, {"s": block})) == []
+    assert remove_stale(cached_artifacts(tmp_path, {"s": block}), str, execute=True) == [str(tmp_path / "s/errors.csv")]
+    err = capsys.readouterr().err
+    assert reason in err and "out of date" in err and "corrupt" not in err
+    assert not list(tmp_path.rglob("*.corrupt"))
+
+
+# --- integrity checks are not optional ----------------------------------------------------------
+
+
+@pytest.mark.parametrize("kind", ["json", "npz", "large_npz"])
+def test_a_checksummed_artifact_without_its_checksum_is_damaged(tmp_path, monkeypatch, kind):
+    """A norm JSON edited by hand with its ``_checksum`` removed, an archive rewritten without it:
+    both fail their check (the checksum is part of the format, not optional)."""
+    import json
+
+    import signorini.pipeline.cache as cache
+    from signorini.pipeline.artifacts import load_npz, save_npz
+
+    if kind == "json":
+        path = tmp_path / "L4.json"
+        save_json(path, {"value": 0.04})
+        data = json.loads(path.read_text())
+        del data["_checksum"]
+        path.write_text(json.dumps({**data, "value": 0.004}))
+        with pytest.raises(CorruptArtifactError, match="no checksum"):
+            load_json(path)
+    else:
+        path = tmp_path / "solution.npz"
+        save_npz(path, u=np.arange(4.0))
+        np.savez(path, **{k: v for k, v in np.load(path).items() if k != "_checksum"})
+        with pytest.raises(CorruptArtifactError, match="no checksum"):
+            load_npz(path)
+        if kind == "large_npz":  # checked structurally, by its zip directory
+            monkeypatch.setattr(cache, "CHECKSUM_MAX_BYTES", 0)
+    assert not artifact_ok(path)
+    assert corrupt_artifacts([path]) == [str(path)]
+
+
+# --- text I/O names its encoding ------------------------------------------------------------------
+
+# calls that read or write text and take an ``encoding`` (open and Path.open unless binary, pathlib,
+# pandas, logging, io, subprocess with text=True)
+_TEXT_CALLS = {"read_text", "write_text", "read_csv", "to_csv", "read_table", "read_json", "to_json"}
+_TEXT_CALLS |= {"FileHandler", "TextIOWrapper"}
+
+
+def _mode(call, index: int):
+    for kw in call.keywords:
+        if kw.arg == "mode":
+            return kw.value.value if isinstance(kw.value, ast.Constant) else None
+    if len(call.args) > index:
+        return call.args[index].value if isinstance(call.args[index], ast.Constant) else None
+    return "r"
+
+
+def unnamed_encodings(source: str) -> list[tuple[int, str]]:
+    """(line, call) of every text I/O call in ``source`` that does not name its encoding."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if not isinstance(node, ast.Call) or {kw.arg for kw in node.keywords} & {"encoding", None}:
+            continue
+        func = node.func
+        name = func.attr if isinstance(func, ast.Attribute) else getattr(func, "id", None)
+        owner = getattr(func.value, "id", None) if isinstance(func, ast.Attribute) else None
+        if name in ("open", "fdopen"):  # open(path, mode), os.fdopen(fd, mode), Path.open(mode)
+            index = 0 if isinstance(func, ast.Attribute) and owner not in ("os", "io") else 1
+            mode = _mode(node, index)
+            bad = mode is None or "b" not in mode
+        elif name == "to_csv":  # with no target it returns the text: no encoding involved
+            bad = bool(node.args) or any(kw.arg == "path_or_buf" for kw in node.keywords)
+        elif name in ("run", "Popen", "check_output", "check_call", "call") and owner == "subprocess":
+            bad = any(kw.arg in ("text", "universal_newlines") for kw in node.keywords)
+        else:
+            bad = name in _TEXT_CALLS
+        if bad:
+            found.append((node.lineno, ast.unparse(node)[:120]))
+    return found
+
+
+def test_the_encoding_check_finds_what_it_should():
+    source = (
+        "open(p)\nopen(p, 'w')\nopen(p, 'rb')\nPath(p).open()\nPath(p).open('wb')\np.read_text()\n"
+        "p.write_text(s, encoding='utf-8')\nos.fdopen(fd, 'w')\nos.fdopen(fd, 'wb')\npd.read_csv(p)\n"
+        "df.to_csv()\ndf.to_csv(p)\nsubprocess.run(c, text=True)\nsubprocess.run(c)\nlogging.FileHandler(p)\n"
+    )
+    assert [line for line, _ in unnamed_encodings(source)] == [1, 2, 4, 6, 8, 10, 12, 13, 15]
+
+
+def test_no_text_io_call_leaves_its_encoding_to_the_locale():
+    """Every file of src/, workflow/ (scripts, peers, the Snakefile's rules), benchmarks/ and
+    notebooks/ names the encoding of every text it reads or writes."""
+    files = [p for d in ("src", "workflow", "benchmarks", "notebooks") for p in sorted((ROOT / d).rglob("*.py"))]
+    found = [f"{p.relative_to(ROOT)}:{line}: {call}" for p in files for line, call in unnamed_encodings(p.read_text())]
+    # the Snakefile and the rule files are not Python: no call of these kinds at all there
+    rules = [ROOT / "Snakefile", *sorted((ROOT / "workflow/rules").glob("*.smk"))]
+    pattern = re.compile(r"\b(open|read_text|write_text|read_csv|to_csv)\(")
+    found += [f"{p.relative_to(ROOT)}: {m.group(0)}" for p in rules for m in pattern.finditer(p.read_text())]
+    assert not found, "\n".join(found)
+
+
+# --- make setup is atomic -------------------------------------------------------------------------
+
+# Stand-ins for the interpreter, pip and uv that `make setup` calls: they behave like the real
+# ones where it matters (pip writes uv's metadata, then the binary, and does nothing once the
+# metadata is there: "Requirement already satisfied") and can be made to hang, to be interrupted.
+FAKE_PYTHON = """#!/bin/bash
+[ "$1 $2" = "-m venv" ] || exit 2
+dir="$3"; mkdir -p "$dir/bin" "$dir/lib"
+cat > "$dir/bin/pip" <<PIP
+#!/bin/bash
+[ -e "$dir/lib/uv.dist-info" ] && exit 0
+mkdir -p "$dir/lib/uv.dist-info"
+printf 'half a binary' > "$dir/bin/uv"
+[ -n "\\$FAKE_HANG_PIP" ] && { touch "\\$FAKE_HANG_PIP"; sleep 60; }
+cp "$FAKE_UV" "$dir/bin/uv" && chmod +x "$dir/bin/uv"
+PIP
+chmod +x "$dir/bin/pip"
+"""
+FAKE_UV = """#!/bin/bash
+case "$1" in
+  --version) echo "uv 0.0.0 (stand-in)" ;;
+  venv) for arg; do last="$arg"; done; mkdir -p "$last/bin"
+        printf '#!/bin/sh\\nexit 0\\n' > "$last/bin/python"; chmod +x "$last/bin/python" ;;
+  pip) if [ "$2" = sync ] && [ -n "$FAKE_HANG_SYNC" ]; then touch "$FAKE_HANG_SYNC"; sleep 60; fi ;;
+esac
+"""
+
+
+def _make_setup(repo: Path, hang: str | None = None, **env: str) -> subprocess.Popen:
+    env = {**os.environ, "FAKE_UV": str(repo / "fake-uv"), **env}
+    if hang:
+        env[hang] = str(repo / "hanging")
+    return subprocess.Popen(
+        ["make", "setup", "UV=", f"PYTHON={repo / 'fake-python'}"],
+        cwd=repo,
+        env=env,
+        start_new_session=True,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        encoding="utf-8",
+    )
+
+
+@pytest.fixture
+def setup_copy(tmp_path):
+    import shutil
+
+    for name in ("Makefile", "environment.lock", "pyproject.toml"):
+        shutil.copy2(ROOT / name, tmp_path / name)
+    for name, text in (("fake-python", FAKE_PYTHON), ("fake-uv", FAKE_UV)):
+        (tmp_path / name).write_text(text)
+        (tmp_path / name).chmod(0o755)
+    return tmp_path
+
+
+@pytest.mark.parametrize("hang", ["FAKE_HANG_PIP", "FAKE_HANG_SYNC"])
+def test_an_interrupted_make_setup_leaves_nothing_that_fails_the_next(setup_copy, hang):
+    """Ctrl-C while uv is being installed (or while the venv is synced): the next ``make setup``
+    succeeds; no half-written .tools/bin/uv, no stamp that trusts a half-synced venv."""
+    run = _make_setup(setup_copy, hang)
+    deadline = time.monotonic() + 60
+    while not (setup_copy / "hanging").exists() and run.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert run.poll() is None, run.stdout.read()
+    os.killpg(run.pid, signal.SIGINT)
+    run.wait(timeout=30)
+    assert not (setup_copy / ".venv/.installed-from-lock").exists()
+    again = _make_setup(setup_copy)
+    out, _ = again.communicate(timeout=60)
+    assert again.returncode == 0, out
+    assert subprocess.run([setup_copy / ".tools/bin/uv", "--version"], capture_output=True).returncode == 0
+    assert (setup_copy / ".venv/.installed-from-lock").exists()
+
+
+def test_a_broken_uv_left_by_an_older_set_up_is_replaced(setup_copy):
+    """A .tools whose uv was cut off (not executable, its metadata installed) is not trusted."""
+    (setup_copy / ".tools/bin").mkdir(parents=True)
+    (setup_copy / ".tools/lib/uv.dist-info").mkdir(parents=True)
+    (setup_copy / ".tools/bin/uv").write_text("half a binary")
+    run = _make_setup(setup_copy)
+    out, _ = run.communicate(timeout=60)
+    assert run.returncode == 0, out
+    version = subprocess.run([setup_copy / ".tools/bin/uv", "--version"], capture_output=True, encoding="utf-8")
+    assert "stand-in" in version.stdout

@@ -133,7 +133,7 @@ def built_targets(root: str | os.PathLike = ".", figures_scene: str | None = Non
     if figures_scene is None:
         import yaml
 
-        config = yaml.safe_load((Path(root) / "workflow/config.yaml").read_text())
+        config = yaml.safe_load((Path(root) / "workflow/config.yaml").read_text(encoding="utf-8"))
         figures_scene = config.get("figures_scene", "paper")
     return [
         target

@@ -60,7 +60,7 @@ def signature_options(module: str, function: str) -> dict[str, Option]:
     """The keyword parameters of ``signorini.solvers.<module>.<function>`` after the data
     ``(A, b, constrained)``, read from the source: the type of the default, or for a default of
     None the builtin type of the annotation ``T | None`` (any other: any type)."""
-    tree = ast.parse((_SOLVERS / f"{module}.py").read_text())
+    tree = ast.parse((_SOLVERS / f"{module}.py").read_text(encoding="utf-8"))
     node = next(n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name == function)
     params = node.args.args[3:]
     defaults = node.args.defaults[-len(params) :] if params else []
