@@ -25,7 +25,8 @@ def current_params(path, provenance):
     """The params a job writing ``path`` would get now, normalised as artifacts record them
     (signorini.pipeline.joblog.plain): Snakemake's own expansion of the producing rule's
     ``params:`` (the rule that wrote it if it still exists, as in either norm_jobs mode the
-    norms of a mesh have two producers with the same params); None when no rule writes it."""
+    norms of a mesh have two producers with the same params); None when no rule writes it.
+    """
     producers = [r for r in workflow.rules if r.is_producer(path)]
     writer = next((r for r in producers if r.name == provenance.get("rule")), None)
     writer = writer or next(iter(producers), None)

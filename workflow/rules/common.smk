@@ -269,7 +269,11 @@ def wp_previous(wildcards):
 
 def wp_peer_driver(wildcards):
     """The PETSc peers' driver, for a peer configuration's jobs (none for the others)."""
-    return [in_checkout(paths.PEER_DRIVER)] if wp_configs(wildcards)[wildcards.solver].peer else []
+    return (
+        [in_checkout(paths.PEER_DRIVER)]
+        if wp_configs(wildcards)[wildcards.solver].peer
+        else []
+    )
 
 
 def wp_disc_norms(wildcards):
