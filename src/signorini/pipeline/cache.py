@@ -179,11 +179,11 @@ ParamsOf = Callable[[str, dict], "dict | None"]
 
 def changed_param(recorded: Mapping, expected: Mapping) -> str | None:
     """The first parameter whose recorded value differs from the expected one, as ``name: old ->
-    new`` (None when they agree)."""
+    new`` (None when they agree); compared as JSON text, as recorded (a NaN equals itself there)."""
     for key in sorted(set(recorded) | set(expected)):
-        old, new = recorded.get(key, "(none)"), expected.get(key, "(none)")
+        old, new = (json.dumps(side.get(key, "(none)"), sort_keys=True) for side in (recorded, expected))
         if old != new:
-            return f"{key}: {json.dumps(old, sort_keys=True)} -> {json.dumps(new, sort_keys=True)}"
+            return f"{key}: {old} -> {new}"
     return None
 
 
