@@ -7,7 +7,10 @@ interruption (the reference).  In a second copy the same target is started again
 run is sent SIGINT (Ctrl-C) or SIGTERM (a scheduler's stop), to its whole process group, after a
 random delay, until ``--kills`` runs were interrupted, with a random artifact of the scene removed
 whenever a run got to the end first (so that there is always work to interrupt).  After every
-kill no file under its final name may fail its integrity check; then one run recovers, and every
+kill no file under its final name may fail its integrity check.  A run that stops with Snakemake's
+IncompleteFilesException (outputs of killed jobs still marked incomplete in .snakemake) is followed
+by one with ``--rerun-incomplete``, as Snakemake tells the user; a run still alive ``GRACE_S``
+after its signal is killed with SIGKILL (and unlocked), and counted.  Then one run recovers, and every
 artifact must equal the reference: tables and archives byte for byte, the JSON sidecars as data
 without what they record about the run (wall times, the machine's load: ``RUN_DEPENDENT``).
 
@@ -35,6 +38,7 @@ from signorini.pipeline.cache import artifact_ok  # noqa: E402
 
 SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
 SIGNALS = {"SIGINT": signal.SIGINT, "SIGTERM": signal.SIGTERM}
+GRACE_S = 180  # how long a signalled run may take to stop its jobs and exit
 
 
 def copy_repo(dest: Path) -> Path:
@@ -46,9 +50,9 @@ def copy_repo(dest: Path) -> Path:
     return dest
 
 
-def start(repo: Path, target: str) -> subprocess.Popen:
+def start(repo: Path, target: str, *extra: str) -> subprocess.Popen:
     return subprocess.Popen(
-        [SNAKEMAKE, "-c2", target],
+        [SNAKEMAKE, "-c2", *extra, target],
         cwd=repo,
         start_new_session=True,  # its own process group: the signal reaches the jobs too, as Ctrl-C does
         stdout=subprocess.DEVNULL,
@@ -104,24 +108,34 @@ def damaged(repo: Path) -> list[str]:
 def campaign(repo: Path, scene: str, kills: int, rng: random.Random, delay: tuple[float, float]) -> list[dict]:
     target = f"results/{scene}/eoc.csv"
     rounds: list[dict] = []
-    while sum(r["killed"] for r in rounds) < kills:
+    while sum(r["killed"] for r in rounds) < kills and len(rounds) < 4 * kills:
+        # a run that failed without a signal: Snakemake found outputs of killed jobs marked
+        # incomplete and asks for --rerun-incomplete, which the next run passes (as a user would)
+        incomplete = bool(rounds) and not rounds[-1]["killed"] and rounds[-1]["exit_code"] != 0
         removed = None
         if (repo / target).exists():  # the last run finished: give the next one work to interrupt
             removed = rng.choice(sorted(p for p in artifacts(repo, scene) if p.endswith((".npz", ".json", ".csv"))))
             (repo / removed).unlink()
         name = rng.choice(sorted(SIGNALS))
         after = round(rng.uniform(*delay), 1)
-        run = start(repo, target)
+        run = start(repo, target, *(["--rerun-incomplete"] if incomplete else []))
         try:
             run.wait(timeout=after)
             killed = False
         except subprocess.TimeoutExpired:
             os.killpg(run.pid, SIGNALS[name])
-            run.wait(timeout=300)
-            killed = True
+            killed, hung = True, False
+            try:
+                run.wait(timeout=GRACE_S)
+            except subprocess.TimeoutExpired:  # not gone after the grace period: kill -9, as a user would
+                hung = True
+                os.killpg(run.pid, signal.SIGKILL)
+                run.wait(timeout=60)
         rounds.append(
             {
                 "signal": name if killed else None,
+                "rerun_incomplete": incomplete,
+                "sigkill_after_grace": killed and hung,
                 "after_s": after,
                 "killed": killed,
                 "exit_code": run.returncode,
@@ -131,6 +145,8 @@ def campaign(repo: Path, scene: str, kills: int, rng: random.Random, delay: tupl
                 "temporaries_left": sorted(str(p.relative_to(repo)) for p in (repo / "results").rglob(".*.tmp")),
             }
         )
+        if rounds[-1]["lock_left"]:  # only after kill -9: Snakemake released it on SIGINT/SIGTERM
+            subprocess.run([SNAKEMAKE, "--unlock"], cwd=repo, capture_output=True, check=True)
         print(json.dumps(rounds[-1]), flush=True)
     return rounds
 
@@ -157,7 +173,9 @@ def main(argv: list[str] | None = None) -> int:
         # recovery: every artifact of the reference is requested (a job's sidecar that no target
         # needs, say a solution.json removed above, is rebuilt only when asked for)
         want = artifacts(reference, args.scene)
-        recovery = subprocess.run([SNAKEMAKE, "-c2", *want], cwd=repo, capture_output=True, encoding="utf-8")
+        recovery = subprocess.run(
+            [SNAKEMAKE, "-c2", "--rerun-incomplete", *want], cwd=repo, capture_output=True, encoding="utf-8"
+        )
         got = artifacts(repo, args.scene)
         differing = {p: _difference(want[p], got[p]) for p in sorted(set(want) & set(got))}
         differing = {p: keys for p, keys in differing.items() if keys}
@@ -167,6 +185,9 @@ def main(argv: list[str] | None = None) -> int:
             "seed": args.seed,
             "kills": sum(r["killed"] for r in rounds),
             "signals": {name: sum(r["signal"] == name for r in rounds) for name in SIGNALS},
+            "grace_s": GRACE_S,
+            "sigkill_after_grace": sum(r.get("sigkill_after_grace", False) for r in rounds),
+            "runs_needing_rerun_incomplete": sum(r["rerun_incomplete"] for r in rounds),
             "rounds": rounds,
             "damaged_after_any_kill": sorted({p for r in rounds for p in r["damaged_after"]}),
             "recovery_exit_code": recovery.returncode,
