@@ -10,20 +10,29 @@ CORES ?= 2
 # any Python >= 3.11 with venv, e.g. PYTHON=/usr/bin/python3 (a PEP 668 system interpreter is fine:
 # nothing is installed into it)
 PYTHON ?= python3
-# an installed uv is used as it is; without one, uv $(UV_VERSION) goes into a private venv (.tools)
+# an installed uv is used as it is; without one, uv $(UV_VERSION) goes to .tools/bin/uv. It is
+# installed into a temporary venv and renamed into place, so an interrupted install (Ctrl-C)
+# never leaves a half-written .tools/bin/uv; one that does not answer --version is replaced.
 UV ?= $(shell command -v uv 2>/dev/null)
-FIND_UV = uv="$(UV)"; if [ -z "$$uv" ]; then \
-	[ -x .tools/bin/uv ] || { "$(PYTHON)" -m venv .tools && .tools/bin/pip install --quiet uv==$(UV_VERSION); } || exit 1; \
-	uv=.tools/bin/uv; fi
+FIND_UV = uv="$(UV)"; if [ -z "$$uv" ]; then uv=.tools/bin/uv; \
+	if ! "$$uv" --version >/dev/null 2>&1; then \
+	mkdir -p .tools/bin && tmp="$$(mktemp -d .tools/install.XXXXXX)" && trap 'rm -rf "$$tmp"' EXIT && \
+	"$(PYTHON)" -m venv "$$tmp/venv" && "$$tmp/venv/bin/pip" install --quiet uv==$(UV_VERSION) && \
+	"$$tmp/venv/bin/uv" --version >/dev/null && mv -f "$$tmp/venv/bin/uv" .tools/bin/uv || exit 1; \
+	fi; fi
 
 .PHONY: setup setup-peers all check test lock lint dag bench report clean-corrupt clean-results
 
 ## setup: create .venv with uv from the hash-pinned environment.lock and install the package (editable)
 setup: $(STAMP)
 
+# The stamp goes first and comes back last: a set-up interrupted anywhere leaves none, and the
+# next one starts from a clean venv (--clear) instead of trusting a half-synced one.
 $(STAMP): environment.lock pyproject.toml
-	@$(FIND_UV); set -x; \
-	$$uv venv --allow-existing --python "$(PYTHON)" $(VENV) && \
+	@$(FIND_UV); \
+	if [ -e $@ ] && $(BIN)/python -c "" 2>/dev/null; then keep=--allow-existing; else keep=--clear; fi; \
+	rm -f $@; set -x; \
+	$$uv venv $$keep --python "$(PYTHON)" $(VENV) && \
 	$$uv pip sync --python $(BIN)/python --require-hashes --compile-bytecode environment.lock && \
 	$$uv pip install --python $(BIN)/python --no-deps --compile-bytecode -e . && \
 	touch $@

@@ -16,17 +16,18 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 sys.path.insert(0, os.path.join(workflow.basedir, "src"))
 from signorini.pipeline.config import DEFAULT_CONFIG, SCHEMA, load_yaml
 
-load_yaml(DEFAULT_CONFIG)
+# the config and schema next to this file, whatever the working directory (-d, -s)
+load_yaml(os.path.join(workflow.basedir, DEFAULT_CONFIG))
 
 
-configfile: DEFAULT_CONFIG
+configfile: os.path.join(workflow.basedir, DEFAULT_CONFIG)
 
 
 # jsonschema would import rfc3987_syntax (a notebook dependency's extra; it compiles 38 lark
 # grammars, about 1 s) for a string format this schema never uses: leave it out.
 sys.modules.setdefault("rfc3987_syntax", None)
 # also fills in the schema's defaults (diagonal, solver_options, conventions, figures_scene)
-validate(config, SCHEMA)
+validate(config, os.path.join(workflow.basedir, SCHEMA))
 
 
 report: "workflow/report/workflow.rst"
@@ -40,6 +41,7 @@ include: "workflow/rules/work_precision.smk"
 include: "workflow/rules/stability.smk"
 include: "workflow/rules/true_norms.smk"
 include: "workflow/rules/report.smk"
+include: "workflow/rules/cache.smk"
 
 
 rule all:

@@ -34,7 +34,7 @@ COLUMNS = ("L4", "Linf", "W14", "W1inf", "H12")
 def paper_table1() -> pd.DataFrame:
     for path in (ROOT / "workflow/reference/paper_table1.csv", ROOT.parent / "shared/paper/table1.csv"):
         if path.exists():
-            df = pd.read_csv(path, comment="#")
+            df = pd.read_csv(path, comment="#", encoding="utf-8")
             df["N"] = [int(h.split("/")[1]) for h in df["h"]]
             return df.set_index("N")
     raise FileNotFoundError("published Table 1 not found")
@@ -82,7 +82,7 @@ def main() -> None:
     for col in COLUMNS:
         data[f"dev_{col}"] = data[col] / paper.loc[data["N"], col].to_numpy() - 1.0
     args.out.mkdir(parents=True, exist_ok=True)
-    data.to_csv(args.out / "conventions.csv", index=False, float_format="%.6e")
+    data.to_csv(args.out / "conventions.csv", index=False, float_format="%.6e", encoding="utf-8")
 
     # which options can move which column
     relevant = {
@@ -108,7 +108,7 @@ def main() -> None:
             key = key if isinstance(key, tuple) else (key,)
             lines.append("| " + " | ".join(map(str, key)) + f" | {signed[key]:+.4%} |")
         lines.append("")
-    (args.out / "conventions.md").write_text("\n".join(lines))
+    (args.out / "conventions.md").write_text("\n".join(lines), encoding="utf-8")
     print("\n".join(lines))
 
 

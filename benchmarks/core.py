@@ -81,13 +81,13 @@ def machine_info() -> dict:
         "threads_env": {k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")},
     }
     try:
-        with open("/proc/meminfo") as fh:
+        with open("/proc/meminfo", encoding="utf-8") as fh:
             total_kib = int(next(line for line in fh if line.startswith("MemTotal")).split()[1])
         info["memory_total_gib"] = round(total_kib / 2**20, 2)
     except (OSError, StopIteration, ValueError):
         pass
     try:
-        with open("/proc/cpuinfo") as fh:
+        with open("/proc/cpuinfo", encoding="utf-8") as fh:
             info["cpu_model"] = next(line.split(":", 1)[1].strip() for line in fh if line.startswith("model name"))
     except (OSError, StopIteration):
         pass
@@ -103,7 +103,7 @@ def package_versions() -> dict:
             versions[name] = None
     try:  # read-only
         versions["git_commit"] = subprocess.run(
-            ["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True, check=True, timeout=10
+            ["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, encoding="utf-8", check=True, timeout=10
         ).stdout.strip()
     except (OSError, subprocess.SubprocessError):
         versions["git_commit"] = None

@@ -49,7 +49,7 @@ TIME_LIMIT_S = 600.0
 
 def peer_configs(names: list[str]) -> dict:
     """The named peer configurations of the shipped work-precision study."""
-    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text(encoding="utf-8"))
     configs = study_configs(config["scenes"]["work_precision"]["study"])
     unknown = [n for n in names if n not in configs or not configs[n].peer]
     if unknown:

@@ -36,7 +36,7 @@ def main() -> None:
     conv = Conventions()
     exact = solve_discrete(disc)
     ref = compute_norms(error_field(problem, disc.mesh, exact.u, conv), COLUMNS)
-    paper = pd.read_csv(ROOT / "workflow/reference/paper_table1.csv", comment="#")
+    paper = pd.read_csv(ROOT / "workflow/reference/paper_table1.csv", comment="#", encoding="utf-8")
     paper = paper.set_index(paper["h"].str.split("/").str[1].astype(int))
     rows = [{"solver": "active_set", "tol": 0.0, **{c: ref[c] for c in COLUMNS}}]
     for tol in (1e-2, 1e-3, 1e-4, 1e-5, 1e-6, 1e-8):
@@ -48,7 +48,7 @@ def main() -> None:
         df[f"moved_{c}"] = df[c] / ref[c] - 1.0
         df[f"paper_dev_{c}"] = df[c] / paper.loc[args.N, c] - 1.0
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    df.to_csv(args.out, index=False, float_format="%.6e")
+    df.to_csv(args.out, index=False, float_format="%.6e", encoding="utf-8")
     print(df[["solver", "tol", *[f"moved_{c}" for c in COLUMNS], *[f"paper_dev_{c}" for c in COLUMNS]]].to_string())
 
 

@@ -44,7 +44,7 @@ def timed_run(repo: Path, args: tuple[str, ...], env: dict) -> dict:
     """One cold Snakemake call in ``repo``: wall time, load before, Slurm jobs submitted."""
     load = os.getloadavg()[0]
     t0 = time.perf_counter()
-    proc = subprocess.run([SNAKEMAKE, *args], cwd=repo, capture_output=True, text=True, env=env)
+    proc = subprocess.run([SNAKEMAKE, *args], cwd=repo, capture_output=True, encoding="utf-8", env=env)
     seconds = time.perf_counter() - t0
     out = proc.stdout + proc.stderr
     if proc.returncode != 0:

@@ -30,7 +30,7 @@ SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
 def timed(repo: Path, *args: str) -> tuple[float, str]:
     """Wall time of one Snakemake call in ``repo`` and its output; a failed call raises."""
     t0 = time.perf_counter()
-    proc = subprocess.run([SNAKEMAKE, *args], cwd=repo, capture_output=True, text=True)
+    proc = subprocess.run([SNAKEMAKE, *args], cwd=repo, capture_output=True, encoding="utf-8")
     seconds = time.perf_counter() - t0
     if proc.returncode != 0:
         raise RuntimeError(f"snakemake {' '.join(args)} failed:\n{proc.stderr[-3000:]}")

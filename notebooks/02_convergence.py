@@ -163,6 +163,6 @@ for obj in explore.display_artifacts(theory_outputs):
     display(obj)
 theory_errors = scene.root / "results" / "theory" / "errors.csv"
 if theory_errors.exists():
-    display(table2_rows(pd.read_csv(theory_errors)).set_index("pair").round(3))
+    display(table2_rows(pd.read_csv(theory_errors, encoding="utf-8")).set_index("pair").round(3))
 elif not theory_outputs:
     print("The theory scene has not been built: run `.venv/bin/snakemake -c2 theory` (about an hour with N = 2001).")

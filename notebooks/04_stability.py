@@ -52,7 +52,7 @@ if outputs:
     for obj in explore.display_artifacts(outputs):
         display(obj)
     if "paper_figures/stability.csv" in outputs:
-        atlas = pd.read_csv(outputs["paper_figures/stability.csv"], comment="#")
+        atlas = pd.read_csv(outputs["paper_figures/stability.csv"], comment="#", encoding="utf-8")
         if "status" in atlas.columns:
             print("status counts:", atlas["status"].value_counts().to_dict())
 else:

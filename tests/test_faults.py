@@ -3,11 +3,14 @@ values, tables that lost a row, a scene whose errors vanish, artifacts unreadabl
 
 from __future__ import annotations
 
+import ast
 import os
+import re
 import signal
 import stat
 import subprocess
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -15,7 +18,7 @@ import yaml
 from helpers import PROBLEM, ROOT
 
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json, save_json
-from signorini.pipeline.cache import artifact_ok, cached_artifacts, corrupt_artifacts, quarantine_corrupt
+from signorini.pipeline.cache import artifact_ok, cached_artifacts, corrupt_artifacts
 from signorini.pipeline.config import ConfigError, check_config
 from signorini.studies.scene.discretise import discretise_stage
 from signorini.studies.scene.eoc import eoc_stage
@@ -57,25 +60,30 @@ def test_a_nan_norm_artifact_never_reaches_a_table(solved, tmp_path):
 
 
 @pytest.mark.parametrize("table, text", [("errors.csv", ERRORS), ("eoc.csv", EOC)])
-def test_a_table_that_lost_a_row_is_caught(tmp_path, table, text):
-    scene = {"N": [11, 21, 41]}
+def test_a_table_that_lost_a_row_is_out_of_date(tmp_path, table, text, capsys):
+    """A complete table without one of the scene's N (``sed -i '3d'``, or the N list changed) is a
+    valid file of another state: removed and rebuilt, and called out of date, not corrupt."""
+    from signorini.pipeline.cache import remove_stale
+
+    scene = {"N": [11, 21, 41], "norms": ["L4"]}
     path = tmp_path / "s" / table
     path.parent.mkdir()
     path.write_text(text)
-    assert not corrupt_artifacts(cached_artifacts(tmp_path, {"s": scene}))
+    assert not remove_stale(cached_artifacts(tmp_path, {"s": scene}), str, execute=True)
     lines = text.splitlines(keepends=True)
-    path.write_text("".join(lines[:2] + lines[3:]))  # sed -i '3d': a complete-looking table without one N
-    assert artifact_ok(path)  # every row is well formed ...
-    assert corrupt_artifacts(cached_artifacts(tmp_path, {"s": scene})) == [str(path)]  # ... but an N is missing
-    assert quarantine_corrupt(cached_artifacts(tmp_path, {"s": scene})) == [str(path)]
-    assert (tmp_path / "s" / f"{table}.corrupt").exists()
+    path.write_text("".join(lines[:2] + lines[3:]))  # a complete-looking table without one N
+    assert artifact_ok(path) and not corrupt_artifacts(cached_artifacts(tmp_path, {"s": scene}))
+    assert remove_stale(cached_artifacts(tmp_path, {"s": scene}), str, execute=True) == [str(path)]
+    err = capsys.readouterr().err
+    assert "out of date" in err and "the scene asks for" in err and "corrupt" not in err
+    assert not path.exists() and not (tmp_path / "s" / f"{table}.corrupt").exists()
 
 
 @pytest.mark.parametrize("value", ["nan", "inf", "-0.5"])
 def test_a_table_with_a_non_finite_or_negative_error_is_caught(tmp_path, value):
     path = tmp_path / "errors.csv"
     path.write_text(ERRORS.replace("0.012", value))
-    assert not artifact_ok(path, ["11", "21", "41"])
+    assert not artifact_ok(path)
 
 
 def test_a_vanishing_error_or_a_single_mesh_stops_the_eoc_job(tmp_path):
@@ -352,3 +360,447 @@ def test_a_run_killed_during_a_job_recovers_bit_for_bit(built_repo, tmp_path, si
     snakemake(repo, "-c1", "results/smoke/N41/solution.npz", "results/smoke/errors.csv")
     assert solution.read_bytes() == before
     assert not list((repo / "results").rglob(".*.tmp"))
+
+
+# --- provenance includes the parameters; words match the state --------------------------------
+
+
+def test_an_artifact_computed_with_other_parameters_is_out_of_date(tmp_path, capsys, monkeypatch):
+    """Its recorded code and inputs are current, only the parameters a job would get now differ
+    (A 10 -> 20): out of date, and so is everything computed from it and the scene's tables."""
+    from signorini.pipeline.artifacts import content_digest, recording
+    from signorini.pipeline.cache import remove_stale, stale_artifacts
+
+    monkeypatch.chdir(tmp_path)  # the workflow names artifacts relative to its directory
+    scene = Path("results/s")
+    system, norm = scene / "N11/system.json", scene / "N11/norms/L4.json"
+    with recording({"rule": "discretise", "code": "c", "params": {"problem": PROBLEM}, "inputs": {}}):
+        save_json(system, {"n": 1})
+    inputs = {str(system): content_digest(system)}
+    with recording({"rule": "norm", "code": "c", "params": {"problem": PROBLEM}, "inputs": inputs}):
+        save_json(norm, {"value": 1.0})
+    (scene / "errors.csv").write_text(ERRORS)
+
+    def cached():
+        return cached_artifacts("results", {"s": {"N": [11, 21, 41], "norms": ["L4"]}})
+
+    def code(rule):
+        return "c"
+
+    assert stale_artifacts(cached(), code, lambda path, prov: {"problem": PROBLEM}) == []
+    now = {"problem": {**PROBLEM, "A": 20}}
+    stale = dict(stale_artifacts(cached(), code, lambda path, prov: now))
+    assert set(stale) == {str(system), str(norm)}
+    assert '"A": 10' in stale[str(system)] and '"A": 20' in stale[str(system)]
+    removed = remove_stale(cached(), code, False, lambda path, prov: now)
+    assert set(removed) == {str(system), str(norm), str(scene / "errors.csv")} and system.exists()  # read-only
+    assert "out of date" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("block", "reason"),
+    [
+        ({"N": [11, 21], "norms": ["L4"]}, "holds the rows N = 11, 21, 41, the scene asks for 11, 21"),
+        ({"N": [11, 21, 41, 81], "norms": ["L4"]}, "the scene asks for 11, 21, 41, 81"),
+        ({"N": [11, 21, 41], "norms": ["L4", "H12"]}, "has the norms L4, the scene asks for L4, H12"),
+        ({"N": [11, 21, 41], "norms": []}, "has the norms L4, the scene asks for none"),
+    ],
+)
+def test_a_table_of_other_meshes_or_norms_is_out_of_date_not_corrupt(tmp_path, capsys, block, reason):
+    from signorini.pipeline.cache import quarantine_corrupt, remove_stale
+
+    (tmp_path / "s").mkdir()
+    (tmp_path / "s/errors.csv").write_text(ERRORS)
+    assert quarantine_corrupt(cached_artifacts(tmp_path, {"s": block})) == []
+    assert remove_stale(cached_artifacts(tmp_path, {"s": block}), str, execute=True) == [str(tmp_path / "s/errors.csv")]
+    err = capsys.readouterr().err
+    assert reason in err and "out of date" in err and "corrupt" not in err
+    assert not list(tmp_path.rglob("*.corrupt"))
+
+
+# --- integrity checks are not optional ----------------------------------------------------------
+
+
+@pytest.mark.parametrize("kind", ["json", "npz", "large_npz"])
+def test_a_checksummed_artifact_without_its_checksum_is_damaged(tmp_path, monkeypatch, kind):
+    """A norm JSON edited by hand with its ``_checksum`` removed, an archive rewritten without it:
+    both fail their check (the checksum is part of the format, not optional)."""
+    import json
+
+    import signorini.pipeline.cache as cache
+    from signorini.pipeline.artifacts import load_npz, save_npz
+
+    if kind == "json":
+        path = tmp_path / "L4.json"
+        save_json(path, {"value": 0.04})
+        data = json.loads(path.read_text())
+        del data["_checksum"]
+        path.write_text(json.dumps({**data, "value": 0.004}))
+        with pytest.raises(CorruptArtifactError, match="no checksum"):
+            load_json(path)
+    else:
+        path = tmp_path / "solution.npz"
+        save_npz(path, u=np.arange(4.0))
+        np.savez(path, **{k: v for k, v in np.load(path).items() if k != "_checksum"})
+        with pytest.raises(CorruptArtifactError, match="no checksum"):
+            load_npz(path)
+        if kind == "large_npz":  # checked structurally, by its zip directory
+            monkeypatch.setattr(cache, "CHECKSUM_MAX_BYTES", 0)
+    assert not artifact_ok(path)
+    assert corrupt_artifacts([path]) == [str(path)]
+
+
+# --- text I/O names its encoding ------------------------------------------------------------------
+
+# calls that read or write text and take an ``encoding`` (open and Path.open unless binary, pathlib,
+# pandas, logging, io, subprocess with text=True)
+_TEXT_CALLS = {"read_text", "write_text", "read_csv", "to_csv", "read_table", "read_json", "to_json"}
+_TEXT_CALLS |= {"FileHandler", "TextIOWrapper"}
+
+
+def _mode(call, index: int):
+    for kw in call.keywords:
+        if kw.arg == "mode":
+            return kw.value.value if isinstance(kw.value, ast.Constant) else None
+    if len(call.args) > index:
+        return call.args[index].value if isinstance(call.args[index], ast.Constant) else None
+    return "r"
+
+
+def unnamed_encodings(source: str) -> list[tuple[int, str]]:
+    """(line, call) of every text I/O call in ``source`` that does not name its encoding."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if not isinstance(node, ast.Call) or {kw.arg for kw in node.keywords} & {"encoding", None}:
+            continue
+        func = node.func
+        name = func.attr if isinstance(func, ast.Attribute) else getattr(func, "id", None)
+        owner = getattr(func.value, "id", None) if isinstance(func, ast.Attribute) else None
+        if name in ("open", "fdopen"):  # open(path, mode), os.fdopen(fd, mode), Path.open(mode)
+            index = 0 if isinstance(func, ast.Attribute) and owner not in ("os", "io") else 1
+            mode = _mode(node, index)
+            bad = mode is None or "b" not in mode
+        elif name == "to_csv":  # with no target it returns the text: no encoding involved
+            bad = bool(node.args) or any(kw.arg == "path_or_buf" for kw in node.keywords)
+        elif name in ("run", "Popen", "check_output", "check_call", "call") and owner == "subprocess":
+            bad = any(kw.arg in ("text", "universal_newlines") for kw in node.keywords)
+        else:
+            bad = name in _TEXT_CALLS
+        if bad:
+            found.append((node.lineno, ast.unparse(node)[:120]))
+    return found
+
+
+def test_the_encoding_check_finds_what_it_should():
+    source = (
+        "open(p)\nopen(p, 'w')\nopen(p, 'rb')\nPath(p).open()\nPath(p).open('wb')\np.read_text()\n"
+        "p.write_text(s, encoding='utf-8')\nos.fdopen(fd, 'w')\nos.fdopen(fd, 'wb')\npd.read_csv(p)\n"
+        "df.to_csv()\ndf.to_csv(p)\nsubprocess.run(c, text=True)\nsubprocess.run(c)\nlogging.FileHandler(p)\n"
+    )
+    assert [line for line, _ in unnamed_encodings(source)] == [1, 2, 4, 6, 8, 10, 12, 13, 15]
+
+
+def test_no_text_io_call_leaves_its_encoding_to_the_locale():
+    """Every file of src/, workflow/ (scripts, peers, the Snakefile's rules), benchmarks/ and
+    notebooks/ names the encoding of every text it reads or writes."""
+    files = [p for d in ("src", "workflow", "benchmarks", "notebooks") for p in sorted((ROOT / d).rglob("*.py"))]
+    found = [f"{p.relative_to(ROOT)}:{line}: {call}" for p in files for line, call in unnamed_encodings(p.read_text())]
+    # the Snakefile and the rule files are not Python: no call of these kinds at all there
+    rules = [ROOT / "Snakefile", *sorted((ROOT / "workflow/rules").glob("*.smk"))]
+    pattern = re.compile(r"\b(open|read_text|write_text|read_csv|to_csv)\(")
+    found += [f"{p.relative_to(ROOT)}: {m.group(0)}" for p in rules for m in pattern.finditer(p.read_text())]
+    assert not found, "\n".join(found)
+
+
+# --- make setup is atomic -------------------------------------------------------------------------
+
+# Stand-ins for the interpreter, pip and uv that `make setup` calls: they behave like the real
+# ones where it matters (pip writes uv's metadata, then the binary, and does nothing once the
+# metadata is there: "Requirement already satisfied") and can be made to hang, to be interrupted.
+FAKE_PYTHON = """#!/bin/bash
+[ "$1 $2" = "-m venv" ] || exit 2
+dir="$3"; mkdir -p "$dir/bin" "$dir/lib"
+cat > "$dir/bin/pip" <<PIP
+#!/bin/bash
+[ -e "$dir/lib/uv.dist-info" ] && exit 0
+mkdir -p "$dir/lib/uv.dist-info"
+printf 'half a binary' > "$dir/bin/uv"
+[ -n "\\$FAKE_HANG_PIP" ] && { touch "\\$FAKE_HANG_PIP"; sleep 60; }
+cp "$FAKE_UV" "$dir/bin/uv" && chmod +x "$dir/bin/uv"
+PIP
+chmod +x "$dir/bin/pip"
+"""
+FAKE_UV = """#!/bin/bash
+case "$1" in
+  --version) echo "uv 0.0.0 (stand-in)" ;;
+  venv) for arg; do last="$arg"; done; mkdir -p "$last/bin"
+        printf '#!/bin/sh\\nexit 0\\n' > "$last/bin/python"; chmod +x "$last/bin/python" ;;
+  pip) if [ "$2" = sync ] && [ -n "$FAKE_HANG_SYNC" ]; then touch "$FAKE_HANG_SYNC"; sleep 60; fi ;;
+esac
+"""
+
+
+def _make_setup(repo: Path, hang: str | None = None, **env: str) -> subprocess.Popen:
+    env = {**os.environ, "FAKE_UV": str(repo / "fake-uv"), **env}
+    if hang:
+        env[hang] = str(repo / "hanging")
+    return subprocess.Popen(
+        ["make", "setup", "UV=", f"PYTHON={repo / 'fake-python'}"],
+        cwd=repo,
+        env=env,
+        start_new_session=True,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        encoding="utf-8",
+    )
+
+
+@pytest.fixture
+def setup_copy(tmp_path):
+    import shutil
+
+    for name in ("Makefile", "environment.lock", "pyproject.toml"):
+        shutil.copy2(ROOT / name, tmp_path / name)
+    for name, text in (("fake-python", FAKE_PYTHON), ("fake-uv", FAKE_UV)):
+        (tmp_path / name).write_text(text)
+        (tmp_path / name).chmod(0o755)
+    return tmp_path
+
+
+@pytest.mark.parametrize("hang", ["FAKE_HANG_PIP", "FAKE_HANG_SYNC"])
+def test_an_interrupted_make_setup_leaves_nothing_that_fails_the_next(setup_copy, hang):
+    """Ctrl-C while uv is being installed (or while the venv is synced): the next ``make setup``
+    succeeds; no half-written .tools/bin/uv, no stamp that trusts a half-synced venv."""
+    run = _make_setup(setup_copy, hang)
+    deadline = time.monotonic() + 60
+    while not (setup_copy / "hanging").exists() and run.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert run.poll() is None, run.stdout.read()
+    os.killpg(run.pid, signal.SIGINT)
+    run.wait(timeout=30)
+    assert not (setup_copy / ".venv/.installed-from-lock").exists()
+    again = _make_setup(setup_copy)
+    out, _ = again.communicate(timeout=60)
+    assert again.returncode == 0, out
+    assert subprocess.run([setup_copy / ".tools/bin/uv", "--version"], capture_output=True).returncode == 0
+    assert (setup_copy / ".venv/.installed-from-lock").exists()
+
+
+def test_a_broken_uv_left_by_an_older_set_up_is_replaced(setup_copy):
+    """A .tools whose uv was cut off (not executable, its metadata installed) is not trusted."""
+    (setup_copy / ".tools/bin").mkdir(parents=True)
+    (setup_copy / ".tools/lib/uv.dist-info").mkdir(parents=True)
+    (setup_copy / ".tools/bin/uv").write_text("half a binary")
+    run = _make_setup(setup_copy)
+    out, _ = run.communicate(timeout=60)
+    assert run.returncode == 0, out
+    version = subprocess.run([setup_copy / ".tools/bin/uv", "--version"], capture_output=True, encoding="utf-8")
+    assert "stand-in" in version.stdout
+
+
+# --- end to end, on a small built copy ------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def tiny_built(tmp_path_factory):
+    """A repository copy whose rendered scene is ``tiny`` (the smoke scene on N = 11, 21: every norm
+    the paper's outputs need), with ``all`` built: the small workflow the fault tests below damage."""
+    from helpers import copy_repo, snakemake
+
+    repo = copy_repo(tmp_path_factory.mktemp("tiny"))
+    path = repo / "workflow/config.yaml"
+    config = yaml.safe_load(path.read_text(encoding="utf-8"))
+    config["scenes"]["tiny"] = {**config["scenes"]["smoke"], "N": [11, 21]}
+    config["figures_scene"] = "tiny"
+    path.write_text(yaml.safe_dump(config, sort_keys=False), encoding="utf-8")
+    snakemake(repo, "-c2", "all", timeout=3600)
+    return repo
+
+
+def _set_scene(repo: Path, **block) -> None:
+    path = repo / "workflow/config.yaml"
+    config = yaml.safe_load(path.read_text(encoding="utf-8"))
+    config["scenes"]["tiny"].update(block)
+    path.write_text(yaml.safe_dump(config, sort_keys=False), encoding="utf-8")
+
+
+def _tree(repo: Path) -> dict[str, bytes]:
+    return {
+        str(p.relative_to(repo)): p.read_bytes()
+        for root in ("results", "paper_figures")
+        for p in sorted((repo / root).rglob("*"))
+        if p.is_file()
+    }
+
+
+@pytest.mark.slow
+def test_a_changed_parameter_or_scene_reruns_without_snakemakes_metadata(tiny_built, tmp_path):
+    """``.snakemake`` deleted and ``--rerun-triggers mtime``: the amplitude doubled doubles every
+    error (the problem is positively homogeneous in A), a shortened norm list leaves exactly its
+    columns, a changed N list exactly its rows; the tables are called out of date, never corrupt."""
+    import shutil
+
+    from helpers import clone_built, snakemake
+
+    repo = clone_built(tiny_built, tmp_path / "repo")
+    errors = repo / "results/tiny/errors.csv"
+    before = read_errors_csv(errors)
+    shutil.rmtree(repo / ".snakemake")
+    _set_scene(repo, problem={**PROBLEM, "A": 20})
+    proc = snakemake(repo, "-n", "--rerun-triggers", "mtime", "--", "results/tiny/eoc.csv")
+    assert "out of date: results/tiny/N11/solution.npz" in proc.stderr and errors.read_text() == before.text
+    proc = snakemake(repo, "-c2", "--rerun-triggers", "mtime", "--", "results/tiny/eoc.csv")
+    after = read_errors_csv(errors)
+    assert after.header == before.header and after.rows.keys() == before.rows.keys()
+    for N, row in before.rows.items():
+        np.testing.assert_allclose(after.rows[N], 2 * np.asarray(row), rtol=1e-9)
+    _set_scene(repo, norms=["L4", "H12"])
+    proc = snakemake(repo, "-c2", "--rerun-triggers", "mtime", "--", "results/tiny/eoc.csv")
+    assert read_errors_csv(errors).header == ["N", "h", "L4", "H12"]
+    assert read_errors_csv(repo / "results/tiny/eoc.csv").header == ["N", "h", "L4", "H12"]
+    _set_scene(repo, N=[11, 21, 31])
+    proc2 = snakemake(repo, "-c2", "--rerun-triggers", "mtime", "--", "results/tiny/eoc.csv")
+    assert list(read_errors_csv(errors).rows) == ["11", "21", "31"]
+    for out in (proc, proc2):
+        assert "out of date: results/tiny/errors.csv" in out.stderr and "corrupt" not in out.stderr
+    assert not list((repo / "results").rglob("*.corrupt"))
+
+
+class _Table:
+    def __init__(self, text: str) -> None:
+        import csv
+
+        self.text = text
+        rows = list(csv.reader(text.splitlines()))
+        self.header = rows[0]
+        self.rows = {row[0]: [float(v) for v in row[2:]] for row in rows[1:]}
+
+
+def read_errors_csv(path: Path) -> _Table:
+    return _Table(path.read_text(encoding="utf-8"))
+
+
+READ_ONLY_CALLS = [
+    ["-n"],
+    ["--dry-run"],
+    ["--dry-r"],  # an abbreviated long option, as argparse accepts it
+    ["--dryrun"],
+    ["-nc2"],  # combined short flags
+    ["-pnc2"],
+    ["-c2", "-n"],
+    ["--cores=2", "--dry-ru"],
+    ["--touch"],
+    ["--profile", "{profile}"],  # dry-run: true in a profile
+    ["--summary"],
+    ["-S"],
+    ["--lint"],
+    ["-l"],
+    ["--list-changes", "code"],
+    ["--rulegraph", "dot"],
+]
+
+
+@pytest.mark.slow
+def test_read_only_calls_change_nothing_however_spelled(tiny_built, tmp_path):
+    """With every norm artifact out of date (a comment added to the norms module) and one norm
+    artifact damaged, no spelling of a read-only call Snakemake accepts removes or moves anything;
+    the dry runs name what a run would do."""
+    from helpers import clone_built, snakemake
+
+    repo = clone_built(tiny_built, tmp_path / "repo")
+    module = repo / "src/signorini/fem/norms.py"
+    module.write_text(module.read_text(encoding="utf-8") + "\n# a comment\n", encoding="utf-8")
+    damaged = repo / "results/tiny/N21/norms/L4.json"
+    damaged.write_text(damaged.read_text(encoding="utf-8")[:50], encoding="utf-8")
+    profile = tmp_path / "dry profile"
+    profile.mkdir()
+    (profile / "config.yaml").write_text("dry-run: true\ncores: 2\n", encoding="utf-8")
+    before = _tree(repo)
+    for call in READ_ONLY_CALLS:
+        args = [arg.format(profile=profile) for arg in call]
+        proc = snakemake(repo, *args, "--", "results/tiny/eoc.csv", check=False, timeout=900)
+        assert _tree(repo) == before, (args, proc.stderr[-3000:])
+        if "-n" in args[0] or "dry" in " ".join(args) or args[0] == "--profile":
+            assert "out of date: results/tiny/N11/norms/L4.json" in proc.stderr, (args, proc.stderr[-3000:])
+            assert f"damaged artifact {damaged.relative_to(repo)}" in proc.stderr, args
+
+
+def non_utf8_locale(tmp_path: Path) -> dict[str, str]:
+    """The environment of a Turkish Latin-5 locale (ISO-8859-9), generated with localedef into
+    ``tmp_path``; without localedef, the C locale with Python's UTF-8 mode and coercion off (ASCII)."""
+    import shutil
+
+    out = tmp_path / "locale"
+    out.mkdir()
+    if shutil.which("localedef"):
+        subprocess.run(["localedef", "-i", "tr_TR", "-f", "ISO-8859-9", str(out / "tr_TR.ISO-8859-9")], check=False)
+        if (out / "tr_TR.ISO-8859-9").exists():
+            return {"LOCPATH": str(out), "LC_ALL": "tr_TR.ISO-8859-9", "PYTHONUTF8": "0"}
+    return {"LC_ALL": "C", "PYTHONUTF8": "0", "PYTHONCOERCECLOCALE": "0"}
+
+
+@pytest.mark.slow
+def test_the_chain_writes_the_same_bytes_under_a_non_utf8_locale(tiny_built, tmp_path):
+    """The scene's tables, Tables 1-2 and the reproduction report rebuilt under a Latin-5 locale are
+    byte for byte the ones built under UTF-8 (they used to read the remarks as Latin-5)."""
+    import sys
+
+    from helpers import SNAKEMAKE, clone_built
+
+    repo = clone_built(tiny_built, tmp_path / "repo")
+    env = {**os.environ, **non_utf8_locale(tmp_path), "PYTHONDONTWRITEBYTECODE": "1"}
+    probe = [sys.executable, "-c", "import locale; print(locale.getpreferredencoding())"]
+    assert "utf" not in subprocess.run(probe, env=env, capture_output=True, encoding="ascii").stdout.lower()
+    rules = ["errors", "eoc", "table1", "table2", "reproduction"]
+    proc = subprocess.run(
+        [SNAKEMAKE, "-c2", "--forcerun", *rules, "--", "all"], cwd=repo, env=env, capture_output=True, timeout=1800
+    )
+    assert proc.returncode == 0, proc.stderr.decode("utf-8", "replace")[-3000:]
+    outputs = ["results/tiny/errors.csv", "results/tiny/eoc.csv", "paper_figures/reproduction.md"]
+    outputs += [f"paper_figures/table{k}.{ext}" for k in (1, 2) for ext in ("csv", "md", "tex")]
+    for path in outputs:
+        assert (repo / path).stat().st_mtime > (tiny_built / path).stat().st_mtime, path  # rebuilt
+        assert (repo / path).read_bytes() == (tiny_built / path).read_bytes(), path
+
+
+@pytest.mark.slow
+def test_the_workflow_runs_from_another_directory_and_a_checkout_with_spaces(tiny_built, tmp_path):
+    """``snakemake -s '<checkout with spaces>/Snakefile' -d '<another dir>'`` started from a third
+    directory: the config, references and package come from the checkout, the results go to -d."""
+    from helpers import copy_repo, snakemake
+
+    checkout = tmp_path / "my check out"
+    checkout.mkdir()
+    copy_repo(checkout)
+    (checkout / "workflow/config.yaml").write_bytes((tiny_built / "workflow/config.yaml").read_bytes())
+    work, elsewhere = tmp_path / "work dir", tmp_path / "else where"
+    elsewhere.mkdir()
+    target = "results/tiny/N11/norms/L4.json"
+    snakemake(elsewhere, "-c2", "-s", str(checkout / "Snakefile"), "-d", str(work), target, timeout=1800)
+    assert load_json(work / target)["value"] == load_json(tiny_built / target)["value"]
+    assert not (checkout / "results").exists() and not (elsewhere / "results").exists()
+
+
+@pytest.mark.slow
+def test_an_interpreter_in_a_path_the_shell_splits_is_refused_before_any_job(tmp_path):
+    """Snakemake leaves the interpreter of script jobs unquoted: every job would fail with
+    ``bash: .../sp: No such file or directory``; the workflow refuses at once and says why."""
+    import sys
+
+    from helpers import copy_repo
+
+    repo = copy_repo(tmp_path)
+    venv = tmp_path / "sp ace" / "venv"
+    venv.parent.mkdir()
+    venv.symlink_to(Path(sys.prefix))
+    proc = subprocess.run(
+        [str(venv / "bin/python"), "-m", "snakemake", "-n", "results/smoke/N11/solution.npz"],
+        cwd=repo,
+        capture_output=True,
+        encoding="utf-8",
+        timeout=600,
+    )
+    out = proc.stdout + proc.stderr  # Snakemake prints a Snakefile's error on stdout
+    assert proc.returncode != 0 and "lies in a path the shell splits" in out and "make setup VENV=" in out
+    assert not (repo / "results").exists()

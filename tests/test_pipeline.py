@@ -15,7 +15,7 @@ from helpers import PROBLEM, ROOT, clone_built, copy_repo, planned, planned_rule
 from signorini.fem.mesh import mesh_width
 from signorini.paper import PAPER_NORMS
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz, save_json, save_npz
-from signorini.pipeline.cache import artifact_ok, executes, quarantine_corrupt
+from signorini.pipeline.cache import artifact_ok, quarantine_corrupt
 from signorini.pipeline.config import ConfigError, check_config
 from signorini.pipeline.joblog import job_log
 from signorini.pipeline.paths import FIGURES, PATHS, TARGETS
@@ -369,27 +369,6 @@ def test_truncated_artifacts_are_detected_and_rebuilt(built_repo, tmp_path):
     assert [r["N"] for r in rebuilt] == ["11", "21", "41"]
     for old, new in zip(csv.DictReader(before_errors.splitlines()), rebuilt, strict=True):
         assert float(new["L4"]) == pytest.approx(float(old["L4"]), rel=1e-12)
-
-
-@pytest.mark.parametrize(
-    ("argv", "runs"),
-    [
-        (["snakemake", "-c2", "all"], True),
-        (["snakemake", "--cores", "2", "--profile", "workflow/profiles/local"], True),
-        (["snakemake", "-c2", "--report-after-run", "all"], True),
-        (["snakemake", "-n", "all"], False),
-        (["snakemake", "-np", "all"], False),
-        (["snakemake", "--dry-run"], False),
-        (["snakemake", "--lint"], False),
-        (["snakemake", "--report", "results/report.html", "all"], False),
-        (["snakemake", "-l"], False),
-        (["snakemake", "--summary"], False),
-        (["snakemake", "-c2", "--rulegraph", "dot", "all"], False),
-        (["snakemake", "-c2", "all", "--", "-n"], True),  # after --, only targets
-    ],
-)
-def test_only_calls_that_run_jobs_touch_the_cache(argv, runs):
-    assert executes(argv) is runs
 
 
 def test_csv_check_detects_truncation(tmp_path):

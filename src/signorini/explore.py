@@ -80,7 +80,7 @@ def build_scene(scene: str = SMOKE_SCENE, root: str | os.PathLike | None = None,
     cmd += [PATHS["errors_csv"].format(scene=scene), PATHS["eoc_csv"].format(scene=scene)]
     t0 = time.perf_counter()
     proc = subprocess.run(
-        cmd, cwd=root, capture_output=True, text=True, env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"}
+        cmd, cwd=root, capture_output=True, encoding="utf-8", env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"}
     )
     if proc.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} (in {root}) failed:\n{proc.stdout[-2000:]}\n{proc.stderr[-4000:]}")
@@ -439,9 +439,9 @@ def display_artifacts(paths: dict[str, Path]) -> list:
     for rel, path in paths.items():
         out.append(Markdown(f"**`{rel}`**"))
         if path.suffix == ".md":
-            out.append(Markdown(path.read_text()))
+            out.append(Markdown(path.read_text(encoding="utf-8")))
         elif path.suffix == ".csv":
-            out.append(pd.read_csv(path, comment="#"))
+            out.append(pd.read_csv(path, comment="#", encoding="utf-8"))
         elif path.suffix == ".png":
             out.append(Image(filename=str(path)))
         else:

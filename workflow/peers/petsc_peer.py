@@ -307,7 +307,7 @@ def _write(outdir: str, result: dict, u) -> dict:
     os.makedirs(outdir, exist_ok=True)
     if u is not None:
         np.savez(os.path.join(outdir, "solution.npz"), u=u)
-    with open(os.path.join(outdir, "result.json"), "w") as fh:
+    with open(os.path.join(outdir, "result.json"), "w", encoding="utf-8") as fh:
         json.dump(result, fh, indent=1, default=float)
     return result
 
@@ -317,7 +317,7 @@ def main(argv: list[str]) -> int:
         print(json.dumps(probe()))
         return 0
     if argv[:1] == ["solve"] and len(argv) == 4:
-        with open(argv[2]) as fh:
+        with open(argv[2], encoding="utf-8") as fh:
             request = json.load(fh)
         solve(argv[1], request, argv[3])
         return 0

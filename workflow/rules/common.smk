@@ -1,7 +1,24 @@
-# Shared helpers: the package import, config checks, the cache check, scenes and code inputs.
+# Shared helpers: the package import, config checks, scenes and code inputs.
 import functools
+import shlex
 import sys
 from pathlib import Path
+
+from snakemake.exceptions import WorkflowError
+
+# Snakemake runs every script job as `<sys.executable> <script>` through bash and quotes only the
+# script (snakemake/script/__init__.py, PythonScript.execute_script), so an interpreter path with
+# a space or another shell character breaks every job ("bash: .../sp: No such file or directory").
+# That cannot be quoted from here: refuse before the first job (with --sdm conda the jobs run
+# `python` of the rules' conda environment instead).
+_deploy = {m.name.lower() for m in workflow.deployment_settings.deployment_method}
+if shlex.quote(sys.executable) != sys.executable and "conda" not in _deploy:
+    raise WorkflowError(
+        f"the Python interpreter {sys.executable!r} lies in a path the shell splits (a space or "
+        "a shell character): Snakemake starts every script job as `<interpreter> <script>` without "
+        "quoting the interpreter, so each job would fail. Put the environment in a plain path, e.g. "
+        "`make setup VENV=$HOME/.venvs/signorini` (the checkout itself may have spaces)."
+    )
 
 # Jobs import the package from src/ next to this Snakefile -- the very files the rules list
 # as inputs -- whether or not (or from where) it is installed: script jobs inherit PYTHONPATH.
@@ -15,14 +32,6 @@ from signorini.fem.norm_names import true_name
 from signorini.paper import FIGURE3_NORMS, TABLE1_NORMS, TABLE2_NORMS
 from signorini.pipeline import paths, resources
 from signorini.pipeline.artifacts import code_digest
-from signorini.pipeline.cache import (
-    cached_artifacts,
-    executes,
-    quarantine_corrupt,
-    remove_leftover_temporaries,
-    remove_stale,
-    warn_corrupt,
-)
 from signorini.pipeline.codedeps import ImportCache, code_inputs
 from signorini.pipeline.config import ConfigError, check_config
 from signorini.studies.stability import atlas as stab_atlas
@@ -80,6 +89,17 @@ wildcard_constraints:
 
 
 PATHS = paths.PATHS
+
+
+def in_checkout(path):
+    """A file of this checkout (next to the Snakefile, e.g. workflow/reference/...): relative as it
+    is when the working directory is the checkout (the paths the outputs name stay the same), else
+    absolute (snakemake -d elsewhere, or -s from another directory)."""
+    base = Path(workflow.basedir)
+    return path if base.resolve() == Path.cwd().resolve() else str(base / path)
+
+
+REFERENCES = {name: in_checkout(path) for name, path in paths.REFERENCES.items()}
 FIGURES = paths.FIGURES
 FIG = config["figures_scene"]  # the scene paper_figures/ is rendered from
 # a mesh's jobs on a cluster (discretise, solve, its norms): one job group, named as in the
@@ -257,7 +277,11 @@ def wp_previous(wildcards):
 
 def wp_peer_driver(wildcards):
     """The PETSc peers' driver, for a peer configuration's jobs (none for the others)."""
-    return [paths.PEER_DRIVER] if wp_configs(wildcards)[wildcards.solver].peer else []
+    return (
+        [in_checkout(paths.PEER_DRIVER)]
+        if wp_configs(wildcards)[wildcards.solver].peer
+        else []
+    )
 
 
 def wp_disc_norms(wildcards):
@@ -284,23 +308,3 @@ def wp_measure_jsons(scene):
 def atlas_of(scene):
     """The parsed atlas of a scene."""
     return stab_atlas.scene_atlas(config, scene)
-
-
-# --- the cache check, before Snakemake inspects any file ---
-
-# A cached artifact damaged after it was written (truncated npz, incomplete JSON) is moved
-# to <name>.corrupt before Snakemake inspects any file, so that it is rebuilt, not read; a
-# read-only call (-n, --lint, --report, -l, --summary, ...) only names it.
-# An artifact whose recorded code digest differs from the current code of its rule (a job that
-# imported the old code finished after an edit) is removed, so that it is rebuilt, not trusted.
-# Temporary files of atomic writes left by a killed job (kill -9) are deleted.
-if workflow.is_main_process:
-    _cached = list(cached_artifacts(paths.RESULTS, config["scenes"]))
-    if executes(sys.argv):
-        quarantine_corrupt(_cached)
-    else:
-        warn_corrupt(_cached)
-    remove_stale(_cached, current_code_digest, execute=executes(sys.argv))
-    remove_leftover_temporaries(
-        [paths.RESULTS, paths.FIGDIR], execute=executes(sys.argv)
-    )

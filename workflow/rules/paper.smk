@@ -119,7 +119,7 @@ rule h12_boundary:
 rule reproduction:
     """Every published cell of Tables 1-2: ours, the paper's, the relative deviation."""
     input:
-        **paths.REFERENCES,
+        **REFERENCES,
         table1=rules.table1.output.csv,
         table2=rules.table2.output.csv,
         h12_boundary=rules.h12_boundary.output.csv,

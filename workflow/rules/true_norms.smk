@@ -7,7 +7,7 @@ rule true_tables:
     """table1_true and table2_true: convention, true and published errors, EOCs of the true norms."""
     input:
         norms=flat(true_table_norms()),
-        paper_table1=paths.REFERENCES["paper_table1"],
+        paper_table1=REFERENCES["paper_table1"],
         code=code("true_tables"),
     output:
         **reported(FIGURES["true_tables"], "true_tables", "Paper", "True norms"),

@@ -88,8 +88,8 @@ rule work_precision_report:
     """The study's findings in numbers, against the published Tables 1-2."""
     input:
         csv=rules.work_precision_table.output.csv,
-        paper_table1=paths.REFERENCES["paper_table1"],
-        paper_table2=paths.REFERENCES["paper_table2"],
+        paper_table1=REFERENCES["paper_table1"],
+        paper_table2=REFERENCES["paper_table2"],
         code=code("work_precision_report"),
     output:
         **reported(FIGURES["work_precision_report"], "work_precision", "Work precision"),

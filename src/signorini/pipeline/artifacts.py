@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import io
 import json
 import os
 import tempfile
@@ -85,7 +84,7 @@ def content_digest(path: str | os.PathLike) -> str:
                 if "_checksum" in data.files:
                     return data["_checksum"].tobytes().decode()
         elif path.suffix == ".json":
-            stored = json.loads(path.read_text()).get("_checksum")
+            stored = json.loads(path.read_text(encoding="utf-8")).get("_checksum")
             if isinstance(stored, str):
                 return stored
         return hashlib.sha256(path.read_bytes()).hexdigest()
@@ -159,7 +158,9 @@ def load_npz(path: str | os.PathLike) -> dict[str, np.ndarray]:
     except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
         raise CorruptArtifactError(f"{path}: unreadable archive ({err})") from err
     stored = arrays.pop("_checksum", None)
-    if stored is None or stored.tobytes().decode() != _digest(arrays):
+    if stored is None:
+        raise CorruptArtifactError(f"{path}: no checksum (edited or damaged)")
+    if stored.tobytes().decode() != _digest(arrays):
         raise CorruptArtifactError(f"{path}: checksum mismatch (truncated or modified)")
     return arrays
 
@@ -180,13 +181,15 @@ def save_json(path: str | os.PathLike, data: dict) -> None:
 def load_json(path: str | os.PathLike) -> dict:
     """Read a JSON object written by ``save_json``."""
     try:
-        data = json.loads(Path(path).read_text())
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
     except (OSError, ValueError) as err:
         raise CorruptArtifactError(f"{path}: unreadable JSON ({err})") from err
     if not isinstance(data, dict) or data.pop("_complete", None) is not True:
         raise CorruptArtifactError(f"{path}: incomplete JSON artifact")
     checksum = data.pop("_checksum", None)
-    if checksum is not None and checksum != _json_digest(data):
+    if checksum is None:  # save_json always writes one: its absence is damage, not an old format
+        raise CorruptArtifactError(f"{path}: no checksum (edited or damaged)")
+    if checksum != _json_digest(data):
         raise CorruptArtifactError(f"{path}: checksum mismatch (edited or damaged)")
     return data
 
@@ -203,6 +206,4 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes) -> None:
 
 def atomic_write_csv(frame, path: str | os.PathLike) -> None:
     """Write a DataFrame as CSV atomically (no index; floats round-trip, shortest repr)."""
-    buf = io.StringIO()
-    frame.to_csv(buf, index=False, lineterminator="\n")
-    atomic_write_text(path, buf.getvalue())
+    atomic_write_text(path, frame.to_csv(index=False, lineterminator="\n"))

@@ -1,10 +1,13 @@
 """Checks of the cached artifacts before Snakemake plans a run.
 
 A cached artifact damaged after it was written (a truncated ``.npz``, an incomplete JSON, a
-cut-off ``errors.csv``) is moved to ``<name>.corrupt`` by ``quarantine_corrupt``, so that
-Snakemake rebuilds it when a job needs it instead of handing it to the next stage.  Only a
-Snakemake call that runs jobs moves anything (``executes``): a dry run, ``--lint``, ``--report``,
-``-l`` or ``--summary`` names the damaged artifacts (``warn_corrupt``) and leaves the cache as it is.
+cut-off ``errors.csv``, a checksum removed by hand) is moved to ``<name>.corrupt`` by
+``quarantine_corrupt``, so that Snakemake rebuilds it when a job needs it instead of handing it
+to the next stage.  A valid artifact that is out of date (computed by other code, from other
+inputs or with other parameters than the current config asks; a scene table holding other meshes
+or norms than the scene's) is removed by ``remove_stale``, whether or not Snakemake's metadata
+knows about it.  Only a Snakemake call that runs jobs changes anything (``runs_jobs``, asked of
+the executor Snakemake starts): a dry run names what it finds and leaves the cache as it is.
 """
 
 from __future__ import annotations
@@ -12,13 +15,15 @@ from __future__ import annotations
 import csv
 import functools
 import io
+import json
 import math
 import os
-import re
 import sys
 import time
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from signorini.pipeline.artifacts import (
     CorruptArtifactError,
@@ -30,18 +35,16 @@ from signorini.pipeline.artifacts import (
 )
 
 
-def _csv_ok(path: Path, rows_expected: Sequence[str] | None = None) -> bool:
+def _csv_ok(path: Path) -> bool:
     """A complete table CSV: ends with a newline, every row has the header's number of
     fields, no empty cell except ``h`` in the ``regression`` row of ``eoc.csv``, finite numbers
-    (and, in ``errors.csv``, non-negative ones); with ``rows_expected`` exactly these ``N`` labels
-    in this order."""
-    text = path.read_text()
+    (and, in ``errors.csv``, non-negative ones).  Which meshes and norms it holds is not damage
+    but currency (``table_mismatch``)."""
+    text = path.read_text(encoding="utf-8")
     if not text.endswith("\n"):
         return False
     rows = list(csv.reader(io.StringIO(text)))
     if len(rows) < 2 or rows[0][:2] != ["N", "h"]:
-        return False
-    if rows_expected is not None and [row[0] for row in rows[1:]] != list(rows_expected):
         return False
     for row in rows[1:]:
         if len(row) != len(rows[0]):
@@ -56,16 +59,49 @@ def _csv_ok(path: Path, rows_expected: Sequence[str] | None = None) -> bool:
     return path.name != "eoc.csv" or rows[-1][0] == "regression"
 
 
-def expected_rows(path: Path, scene_N: Sequence[int]) -> list[str] | None:
-    """The ``N`` labels ``errors.csv`` / ``eoc.csv`` of a scene with meshes ``scene_N`` must hold."""
-    labels = [str(N) for N in scene_N]
-    return {"errors.csv": labels, "eoc.csv": [*labels[1:], "regression"]}.get(path.name)
+@dataclass(frozen=True)
+class TableShape:
+    """What a scene table must hold: its ``N`` labels (first column) and its header."""
+
+    rows: tuple[str, ...]
+    columns: tuple[str, ...]
+
+
+def expected_shape(path: Path, block: Mapping) -> TableShape | None:
+    """The rows and columns ``errors.csv`` / ``eoc.csv`` of a scene with config ``block`` must hold
+    (``N``, ``h``, then the scene's norms in scene order, as ``errors_stage`` writes them)."""
+    labels = tuple(str(N) for N in block.get("N", []))
+    rows = {"errors.csv": labels, "eoc.csv": (*labels[1:], "regression")}.get(path.name)
+    return None if rows is None else TableShape(rows, ("N", "h", *block.get("norms", [])))
+
+
+def _listed(items: Sequence[str]) -> str:
+    return ", ".join(items) or "none"
+
+
+def table_mismatch(path: Path, shape: TableShape | None) -> str | None:
+    """Why a (complete) table is out of date: it holds other meshes or norms than ``shape`` asks
+    (None when it holds exactly those, or cannot be read: the damage check names that)."""
+    if shape is None or not path.is_file() or not artifact_ok(path):
+        return None
+    try:
+        rows = list(csv.reader(io.StringIO(path.read_text(encoding="utf-8"))))
+    except (OSError, UnicodeDecodeError, csv.Error):
+        return None
+    if not rows:
+        return None
+    held = tuple(row[0] for row in rows[1:] if row)
+    if held != shape.rows:
+        return f"holds the rows N = {_listed(held)}, the scene asks for {_listed(shape.rows)}"
+    if tuple(rows[0]) != shape.columns:
+        return f"has the norms {_listed(rows[0][2:])}, the scene asks for {_listed(shape.columns[2:])}"
+    return None
 
 
 def _benchmark_ok(path: Path) -> bool:
     """A complete Snakemake benchmark file: a header starting with ``s`` (seconds), at least one
     row with the header's number of fields and a finite, non-negative number of seconds."""
-    text = path.read_text()
+    text = path.read_text(encoding="utf-8")
     rows = [line.split("\t") for line in text.splitlines()]
     if not text.endswith("\n") or len(rows) < 2 or rows[0][0] != "s":
         return False
@@ -90,10 +126,9 @@ def _zip_complete(path: Path) -> bool:
         return False
 
 
-def artifact_ok(path: str | os.PathLike, rows_expected: Sequence[str] | None = None) -> bool:
-    """True unless ``path`` exists and fails its check (npz checksum, JSON completeness
-    marker, complete rows of ``errors.csv``/``eoc.csv``, with ``rows_expected``: exactly those ``N``,
-    complete rows of a benchmark ``.tsv``)."""
+def artifact_ok(path: str | os.PathLike) -> bool:
+    """True unless ``path`` exists and fails its integrity check (npz checksum, JSON checksum and
+    completeness marker, complete rows of ``errors.csv``/``eoc.csv`` and of a benchmark ``.tsv``)."""
     path = Path(path)
     if not path.exists():
         return True
@@ -105,7 +140,7 @@ def artifact_ok(path: str | os.PathLike, rows_expected: Sequence[str] | None = N
         elif path.suffix == ".json":
             load_json(path)
         elif path.suffix == ".csv":
-            return _csv_ok(path, rows_expected)
+            return _csv_ok(path)
         elif path.suffix == ".tsv":
             return _benchmark_ok(path)
     except (CorruptArtifactError, OSError, UnicodeDecodeError, csv.Error):
@@ -113,62 +148,20 @@ def artifact_ok(path: str | os.PathLike, rows_expected: Sequence[str] | None = N
     return True
 
 
-# Snakemake options after which a call only plans, lists, lints or reports
-READ_ONLY_OPTIONS = frozenset(
-    {
-        "--dry-run",
-        "--dryrun",
-        "--lint",
-        "--report",
-        "--list-rules",
-        "--list",
-        "--list-target-rules",
-        "--lt",
-        "--summary",
-        "--detailed-summary",
-        "--dag",
-        "--rulegraph",
-        "--filegraph",
-        "--d3dag",
-        "--list-changes",
-        "--lc",
-        "--list-input-changes",
-        "--li",
-        "--list-params-changes",
-        "--lp",
-        "--list-untracked",
-        "--lu",
-        "--print-compilation",
-        "--unlock",
-        "--containerize",
-        "--export-cwl",
-        "--generate-unit-tests",
-        "--archive",
-        "--cleanup-metadata",
-        "--help",
-        "--version",
-    }
-)
-READ_ONLY_SHORT = frozenset("nlSDhv")  # -n, -l, -S, -D, -h, -v, also in clusters such as -np
-
-
-def executes(argv: list[str]) -> bool:
-    """Whether a Snakemake command line (``sys.argv``) runs jobs, i.e. is none of the read-only calls."""
-    for arg in argv[1:]:
-        if arg == "--":
-            break
-        if arg.split("=", 1)[0] in READ_ONLY_OPTIONS:
-            return False
-        if re.fullmatch(r"-[A-Za-z]+", arg) and READ_ONLY_SHORT & set(arg[1:]):
-            return False
-    return True
+def runs_jobs(executor_plugin: Any) -> bool:
+    """Whether Snakemake runs jobs with the executor plugin it passes to ``Workflow.execute``:
+    neither a dry run (``-n`` however spelled, ``dryrun`` in a profile) nor ``--touch``.  Calls
+    that plan nothing (``--lint``, ``-l``, ``--summary``, ``--report``, ``--dag``, ...) never reach
+    ``execute``, so whatever Snakemake's parser accepts is decided as Snakemake decides it."""
+    settings = executor_plugin.common_settings
+    return not (settings.dryrun_exec or settings.touch_exec)
 
 
 def corrupt_artifacts(paths: Iterable) -> list[str]:
     """The existing but damaged artifacts among ``paths`` (a path, or a pair of a table's path and
     the ``N`` labels it must hold, as ``cached_artifacts`` yields them)."""
-    checks = [item if isinstance(item, tuple) else (item, None) for item in paths]
-    return [str(path) for path, rows in checks if not artifact_ok(path, rows)]
+    checks = [item[0] if isinstance(item, tuple) else item for item in paths]
+    return [str(path) for path in checks if not artifact_ok(path)]
 
 
 def warn_corrupt(paths: Iterable[str | os.PathLike]) -> list[str]:
@@ -181,12 +174,22 @@ def warn_corrupt(paths: Iterable[str | os.PathLike]) -> list[str]:
     return damaged
 
 
-def stale_artifacts(paths: Iterable, current_code: Callable[[str], str]) -> list[tuple[str, str]]:
-    """The artifacts among ``paths`` whose recorded code digest differs from ``current_code(rule)``
-    of the rule that wrote them (a job that ran older code, say an edit during the run, which
-    modification times cannot tell), that were computed from other inputs than the ones now on
-    disk (an input replaced by a copy with an old modification time), or from such an artifact;
-    each with the reason."""
+ParamsOf = Callable[[str, dict], "dict | None"]
+
+
+def changed_param(recorded: Mapping, expected: Mapping) -> str | None:
+    """The first parameter whose recorded value differs from the expected one, as ``name: old ->
+    new`` (None when they agree); compared as JSON text, as recorded (a NaN equals itself there)."""
+    for key in sorted(set(recorded) | set(expected)):
+        old, new = (json.dumps(side.get(key, "(none)"), sort_keys=True) for side in (recorded, expected))
+        if old != new:
+            return f"{key}: {old} -> {new}"
+    return None
+
+
+def _recorded(paths: Iterable) -> dict[str, dict]:
+    """{path: provenance} of the existing ``.npz``/``.json`` artifacts among ``paths`` (damaged ones
+    are left to the damage check)."""
     recorded: dict[str, dict] = {}
     for item in paths:
         path = Path(item[0] if isinstance(item, tuple) else item)
@@ -195,14 +198,32 @@ def stale_artifacts(paths: Iterable, current_code: Callable[[str], str]) -> list
         try:
             recorded[str(path)] = provenance_of(path) or {}
         except CorruptArtifactError:
-            continue  # the damage check moves it
+            continue
+    return recorded
+
+
+def stale_artifacts(
+    paths: Iterable, current_code: Callable[[str], str], current_params: ParamsOf | None = None
+) -> list[tuple[str, str]]:
+    """The artifacts among ``paths`` that are valid but out of date, each with the reason: a recorded
+    code digest other than ``current_code(rule)`` of the rule that wrote it (a job that ran older
+    code, say an edit during the run, which modification times cannot tell); inputs other than the
+    ones now on disk (an input replaced by a copy with an old modification time); parameters other
+    than ``current_params(path, provenance)``, the ones a job writing it now would get (a changed
+    scene, also when Snakemake's metadata is gone); computed from such an artifact; a scene table
+    (a pair of path and ``TableShape``) holding other meshes or norms than its scene's."""
+    paths = list(paths)
+    recorded = _recorded(paths)
     stale: dict[str, str] = {}
     digest = functools.cache(content_digest)  # the norms of a mesh share its solution
     for path, prov in recorded.items():
+        expected = current_params(path, prov) if current_params and "params" in prov else None
         if prov.get("code") and prov["code"] != current_code(prov["rule"]):
             stale[path] = "was computed by other code than the current one"
         elif changed := changed_input(prov, digest):
             stale[path] = f"was computed from another {changed} than the one now on disk"
+        elif expected is not None and (changed := changed_param(prov["params"], expected)):
+            stale[path] = f"was computed with other parameters than the config asks now ({changed})"
     grown = True
     while grown:  # and everything computed from a stale artifact
         grown = False
@@ -210,22 +231,33 @@ def stale_artifacts(paths: Iterable, current_code: Callable[[str], str]) -> list
             source = next((p for p in prov.get("inputs") or {} if p in stale), None)
             if path not in stale and source:
                 stale[path], grown = f"was computed from {source}, which is out of date", True
+    for item in paths:
+        if isinstance(item, tuple) and (reason := table_mismatch(Path(item[0]), item[1])):
+            stale[str(item[0])] = reason
     return list(stale.items())
 
 
-def remove_stale(paths: Iterable, current_code: Callable[[str], str], execute: bool) -> list[str]:
-    """Delete the stale artifacts (``stale_artifacts``) and the scene tables computed from them
+def remove_stale(
+    paths: Iterable, current_code: Callable[[str], str], execute: bool, current_params: ParamsOf | None = None
+) -> list[str]:
+    """Delete the out-of-date artifacts (``stale_artifacts``) and the scene tables computed from them
     (``errors.csv``, ``eoc.csv`` of the same scene), so that a job that needs one rebuilds it and
-    everything after it reruns, or, in a read-only call (``execute`` false), only name them."""
-    stale = stale_artifacts(paths, current_code)
+    everything after it reruns, or, in a read-only call (``execute`` false), only name them.  They
+    are valid files of another state, not damage: deleted, not moved to ``.corrupt``."""
+    stale = stale_artifacts(paths, current_code, current_params)
+    named = {path for path, _ in stale}
     scenes = {Path(*Path(path).parts[:2]) for path, _ in stale}  # results/<scene>/...
     derived = [str(scene / name) for scene in sorted(scenes) for name in ("errors.csv", "eoc.csv")]
-    stale += [(path, "was derived from a stale artifact of its scene") for path in derived if Path(path).exists()]
+    stale += [
+        (path, "was derived from an out-of-date artifact of its scene")
+        for path in derived
+        if Path(path).exists() and path not in named
+    ]
     for path, reason in stale:
         if execute:
             os.remove(path)
         verb = "removed; rebuilt when a job needs it" if execute else "a run that needs it rebuilds it"
-        print(f"signorini: {path} {reason} ({verb})", file=sys.stderr)
+        print(f"signorini: out of date: {path} {reason} ({verb})", file=sys.stderr)
     return [path for path, _ in stale]
 
 
@@ -271,12 +303,12 @@ def quarantine_corrupt(paths: Iterable[str | os.PathLike]) -> list[str]:
 def cached_artifacts(root: str | os.PathLike, scenes: Mapping[str, Mapping]) -> Iterator[Path | tuple]:
     """The checkable cached artifacts (``.npz``, ``.json``, ``errors.csv``, ``eoc.csv``, benchmark
     ``.tsv``) of the given scenes under ``root`` (the results directory), atlas cases included;
-    the two tables come with the ``N`` labels they must hold (``expected_rows``)."""
+    the two tables come with what they must hold (``expected_shape``)."""
     for scene, block in scenes.items():
         base = Path(root) / scene
         yield from base.glob("*.npz")
         for table in (base / "errors.csv", base / "eoc.csv"):
-            yield table, expected_rows(table, block.get("N", []))
+            yield table, expected_shape(table, block)
         yield from base.glob("N*/system.*")
         yield from base.glob("N*/solution.*")
         yield from base.glob("N*/norms/*.json")

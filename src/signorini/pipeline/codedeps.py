@@ -81,7 +81,7 @@ def _direct(path: Path, src: Path, digest: str) -> frozenset[Path]:
     """Package files one file imports directly (with the ``__init__.py`` of their packages);
     ``digest``, of the file's content, keys the memo."""
     module = _module_name(path, src) if path.is_relative_to(src) else "__main__"
-    tree = ast.parse(path.read_text(), filename=str(path))
+    tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
     found: set[Path] = set()
     for name in _imports(tree, module, path.name == "__init__.py"):
         parts = name.split(".")
@@ -102,7 +102,7 @@ class ImportCache:
     def __init__(self, path: str | os.PathLike) -> None:
         self.path = Path(path)
         try:
-            entries = json.loads(self.path.read_text())
+            entries = json.loads(self.path.read_text(encoding="utf-8"))
             self._entries = entries if isinstance(entries, dict) else {}
         except (OSError, ValueError):
             self._entries = {}
@@ -127,7 +127,7 @@ class ImportCache:
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             fd, tmp = tempfile.mkstemp(dir=self.path.parent, prefix=f".{self.path.name}.", suffix=".tmp")
-            with os.fdopen(fd, "w") as fh:
+            with os.fdopen(fd, "w", encoding="utf-8") as fh:
                 json.dump(self._entries, fh)
             os.replace(tmp, self.path)
             self._changed = False

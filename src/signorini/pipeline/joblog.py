@@ -37,16 +37,18 @@ def check_inputs(paths: list[str]) -> None:
             raise StaleInputError(f"{path} was computed from another {changed} than the one now on disk; rebuild it")
 
 
+def plain(items: Any) -> dict:
+    """Snakemake's params or wildcards (name, value pairs) as the JSON values an artifact records;
+    the cache check normalises the params a job would get now the same way."""
+    return json.loads(json.dumps(dict(items), default=str))
+
+
 def job_provenance(job: Any) -> dict:
     """What a Snakemake job's artifacts record: its rule, the digest of its code inputs (script and
     package modules, read now, at job start), its parameters and wildcards, and the content digest
     of each of its other inputs."""
     code = list(getattr(job.input, "code", []))
     data = [str(path) for path in job.input if str(path) not in set(code) and Path(path).is_file()]
-
-    def plain(items: Any) -> dict:
-        return json.loads(json.dumps(dict(items), default=str))
-
     return {
         "rule": job.rule,
         "code": code_digest(code),
@@ -72,7 +74,7 @@ def job_log(job: Any) -> Iterator[logging.Logger]:
     handlers: list[logging.Handler] = [logging.StreamHandler(sys.stderr)]
     if path:
         Path(path).parent.mkdir(parents=True, exist_ok=True)
-        handlers.append(logging.FileHandler(path, mode="w"))
+        handlers.append(logging.FileHandler(path, mode="w", encoding="utf-8"))
     file_handlers = handlers[1:]
     fmt = logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s")
     for handler in handlers:

@@ -121,5 +121,5 @@ def slurm_node_limits(partition: str | None = None) -> NodeLimits:
     cmd = ["sinfo", "--Node", "--noheader", "--format=%P|%c|%m|%l"]
     if partition:
         cmd.append(f"--partition={partition}")
-    out = subprocess.run(cmd, capture_output=True, text=True, check=True, timeout=60).stdout
+    out = subprocess.run(cmd, capture_output=True, encoding="utf-8", check=True, timeout=60).stdout
     return parse_sinfo(out, partition)

@@ -13,7 +13,8 @@ def read_table_csv(path: str | os.PathLike) -> dict[str, dict[str, float]]:
     """A table CSV (ours or the transcribed published one; ``#`` lines are comments) as
     ``{row label: {column: value}}``; empty cells are left out."""
     rows: dict[str, dict[str, float]] = {}
-    lines = [ln for ln in Path(path).read_text().splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+    text = Path(path).read_text(encoding="utf-8")
+    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
     header = [c.strip() for c in lines[0].split(",")]
     for line in lines[1:]:
         cells = [c.strip() for c in line.split(",")]

@@ -74,7 +74,7 @@ The split moves `H^{{1/2}}` by {moved} (relative).
 
 def h12_section(h12_csv: str | os.PathLike, paper: Mapping) -> str:
     """The ``H^{1/2}`` column with the whole-edge and the split boundary rule against the paper."""
-    lines = Path(h12_csv).read_text().splitlines()
+    lines = Path(h12_csv).read_text(encoding="utf-8").splitlines()
     rows, dev_whole, dev_split, moved = [], [], [], []
     for line in lines[1:]:
         N, _, whole, split = line.split(",")
@@ -121,6 +121,6 @@ def reproduction_stage(
         table1=md_table(HEADER, rows1),
         table2=md_table(HEADER, rows2),
         h12_boundary=h12_section(h12_boundary, read_table_csv(paper_table1)) if h12_boundary else "",
-        remarks=Path(remarks).read_text().strip(),
+        remarks=Path(remarks).read_text(encoding="utf-8").strip(),
     )
     atomic_write_text(out_md, text)

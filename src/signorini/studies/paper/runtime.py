@@ -23,7 +23,7 @@ COLUMNS = ["rule", "scene", "N", "norm", *BENCHMARK_FIELDS.values(), "timer_s", 
 
 
 def _last_benchmark(path: str | os.PathLike) -> Mapping[str, str]:
-    with open(path) as fh:
+    with open(path, encoding="utf-8") as fh:
         rows = list(csv.DictReader(fh, delimiter="\t"))
     if not rows:
         raise CorruptArtifactError(f"{path}: empty benchmark file")

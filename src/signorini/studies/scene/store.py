@@ -150,7 +150,7 @@ def read_errors_csv(path: str | os.PathLike) -> pd.DataFrame:
     import pandas as pd
 
     try:
-        df = pd.read_csv(path, dtype={"N": str})
+        df = pd.read_csv(path, dtype={"N": str}, encoding="utf-8")
     except (OSError, ValueError) as err:
         raise CorruptArtifactError(f"{path}: unreadable CSV ({err})") from err
     if list(df.columns[:2]) != ["N", "h"] or df.empty:

@@ -238,7 +238,7 @@ def report_stage(
     from signorini.studies.scene.store import read_quadrature_error
     from signorini.studies.theory.figures import extra_figure, rate_figure
 
-    errors = pd.read_csv(errors_csv)
+    errors = pd.read_csv(errors_csv, encoding="utf-8")
     table = theory_table(errors, [load_json(p) for p in theory_jsons])
     rates = rate_rows(errors)
     atomic_write_text(outs["csv"], table.to_csv(index=False, float_format="%.6e"))

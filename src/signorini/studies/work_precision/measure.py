@@ -96,7 +96,7 @@ def _log_reason(path: Path | None) -> str:
         return ""
     keep = [
         " ".join(line.split())
-        for line in path.read_text(errors="replace").splitlines()
+        for line in path.read_text(encoding="utf-8", errors="replace").splitlines()
         if re.search(r"error|model status", line, re.IGNORECASE)
     ]
     return "; ".join(dict.fromkeys(keep))[:300]

@@ -59,7 +59,7 @@ def probe(python: str | None, driver: str | os.PathLike) -> dict:
         return {"petsc4py": False, "error": f"peer interpreter {python} not found"}
     try:
         proc = subprocess.run(
-            [python, str(driver), "probe"], capture_output=True, text=True, timeout=PROBE_TIMEOUT_S, env=_env()
+            [python, str(driver), "probe"], capture_output=True, encoding="utf-8", timeout=PROBE_TIMEOUT_S, env=_env()
         )
     except (OSError, subprocess.TimeoutExpired) as err:
         return {"petsc4py": False, "error": f"peer interpreter {python}: {type(err).__name__}: {err}"}
@@ -114,15 +114,15 @@ def run_peer(
     }
     timeout = None if time_limit_s is None else float(time_limit_s) + START_SLACK_S
     with tempfile.TemporaryDirectory(prefix="wp-peer-") as tmp:
-        (Path(tmp) / "request.json").write_text(json.dumps(request))
+        (Path(tmp) / "request.json").write_text(json.dumps(request), encoding="utf-8")
         command = [route.python, route.driver, "solve", route.system, str(Path(tmp) / "request.json"), tmp]
         try:
-            proc = subprocess.run(command, capture_output=True, text=True, timeout=timeout, env=_env())
+            proc = subprocess.run(command, capture_output=True, encoding="utf-8", timeout=timeout, env=_env())
         except subprocess.TimeoutExpired:
             return PeerOutcome(None, "failed", f"time limit ({time_limit_s:g} s)", [float(timeout or 0.0)])
         if proc.returncode != 0 or not (Path(tmp) / "result.json").exists():
             return PeerOutcome(None, "failed", f"driver exited {proc.returncode}: {_last_line(proc.stderr)}", [])
-        answer = json.loads((Path(tmp) / "result.json").read_text())
+        answer = json.loads((Path(tmp) / "result.json").read_text(encoding="utf-8"))
         u = np.load(Path(tmp) / "solution.npz")["u"] if answer.get("status") == "done" else None
     return _outcome(config, disc, tol, answer, u)
 

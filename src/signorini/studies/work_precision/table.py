@@ -72,7 +72,7 @@ def read_measurements(path: str | os.PathLike) -> pd.DataFrame:
 
     try:
         dtype = {"reason": str, "times": str, "tol_label": str, "converged_reason": str, "peer_info": str}
-        df = pd.read_csv(path, dtype=dtype, keep_default_na=True)
+        df = pd.read_csv(path, dtype=dtype, keep_default_na=True, encoding="utf-8")
     except (OSError, ValueError) as err:
         raise CorruptArtifactError(f"{path}: unreadable CSV ({err})") from err
     df["reason"] = df["reason"].fillna("")
