@@ -66,14 +66,14 @@ def scene_markdown(scene: str, errors_csv: str | os.PathLike, eoc_csv: str | os.
     from signorini.formatting import h_label, md_table, sci_md
     from signorini.paper import label_md
 
-    errors = pd.read_csv(errors_csv)
+    errors = pd.read_csv(errors_csv, encoding="utf-8")
     norms = [c for c in errors.columns if c not in ("N", "h")]
     header = ["h", *(label_md(n) for n in norms)]
     lines = [f"# Scene `{scene}`", "", f"Errors ‖u − u_h‖ (`{errors_csv}`):", ""]
     lines.append(md_table(header, [[h_label(r["N"]), *(sci_md(float(r[n])) for n in norms)]
                                    for _, r in errors.iterrows()]))
     if eoc_csv is not None and Path(eoc_csv).exists():
-        eoc = pd.read_csv(eoc_csv, dtype={"N": str})
+        eoc = pd.read_csv(eoc_csv, dtype={"N": str}, encoding="utf-8")
         rows = [["regr." if r["N"] == "regression" else h_label(r["N"]), *(f"{float(r[n]):.3f}" for n in norms)]
                 for _, r in eoc.iterrows()]
         lines += ["", f"EOCs of consecutive meshes and the regression slope (`{eoc_csv}`):", "", md_table(header, rows)]
