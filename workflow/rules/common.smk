@@ -24,7 +24,7 @@ from signorini.pipeline.cache import (
     warn_corrupt,
 )
 from signorini.pipeline.codedeps import ImportCache, code_inputs
-from signorini.pipeline.config import ConfigError, check_config
+from signorini.pipeline.config import ConfigError, check_config, one_line_errors
 from signorini.studies.stability import atlas as stab_atlas
 from signorini.studies.work_precision import study as wp_study
 
@@ -51,11 +51,17 @@ def slurm_node(workflow):
     return node
 
 
-# integer N, norm names of the grammar, admissible problem parameters
+# integer N, norm names of the grammar, admissible problem parameters; atlas blocks (case names,
+# groups, problems, solver columns); study blocks (reuse of the source scene's artifacts): one line
 _mem_limit = getattr(workflow, "global_resources", {}).get(
     "mem_mb"
 )  # --resources / profile
-check_config(config, getattr(_mem_limit, "value", _mem_limit))
+with one_line_errors(stab_atlas.AtlasConfigError, wp_study.StudyConfigError):
+    check_config(config, getattr(_mem_limit, "value", _mem_limit))
+    stab_atlas.check_atlases(config)
+    for _name, _scene in config["scenes"].items():
+        if "study" in _scene:
+            wp_study.check_study(config["scenes"], _name)
 
 
 # Through Slurm, every scene job's memory and run-time request must fit the largest node of the
@@ -64,13 +70,6 @@ check_config(config, getattr(_mem_limit, "value", _mem_limit))
 onstart:
     if (node := slurm_node(workflow)) is not None:
         check_config(config, getattr(_mem_limit, "value", _mem_limit), node=node)
-
-
-# atlas blocks: case names, groups, problems, solver columns
-stab_atlas.check_atlases(config)
-for _name, _scene in config["scenes"].items():
-    if "study" in _scene:  # study blocks: reuse of the source scene's artifacts
-        wp_study.check_study(config["scenes"], _name)
 
 
 wildcard_constraints:
