@@ -249,7 +249,7 @@ def _check_figures_scene(config: Mapping, scenes: Mapping) -> None:
         return
     if fig not in scenes:
         raise ConfigError(f"figures_scene: {fig!r} is not one of the scenes {sorted(scenes)}")
-    needed = list(dict.fromkeys([*TABLE1_NORMS, *TABLE2_NORMS, *FIGURE3_NORMS]))
+    needed = list(dict.fromkeys([*TABLE2_NORMS, *TABLE1_NORMS, *FIGURE3_NORMS]))
     missing = [n for n in needed if n not in scenes[fig].get("norms", [])]
     if missing:
         raise ConfigError(
