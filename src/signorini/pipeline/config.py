@@ -216,9 +216,13 @@ def check_memory(field: str, N: int, limit_mb: int, available: str = "available"
     rule, need = largest_job(N)
     if need > limit_mb:
         raise ConfigError(
-            f"{field}: N = {N} needs about {need / 1024:.1f} GB for its {rule} job (estimate from the "
+            f"{field}: N = {N} needs about {_gb(need)} for its {rule} job (estimate from the "
             f"peaks measured at N = 2001), more than the {limit_mb / 1024:.1f} GB {available}"
         )
+
+
+def _gb(mb: float) -> str:
+    return f"{mb / 1024:.1f} GB" if mb < 1024 * 10**5 else f"{mb / 1024:.1e} GB"
 
 
 def check_scene_name(field: str, name: object) -> None:
