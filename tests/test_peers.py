@@ -237,7 +237,8 @@ def test_peers_in_the_small_study(built_repo):
         assert "## PETSc peers" in (built_repo / "paper_figures/work_precision.md").read_text()
     else:
         assert set(rows["status"]) == {"skipped"}
-        assert found["error"] and set(rows["reason"]) == {found["error"]}
+        # N = 11 gives the probe's reason; N = 21 the same, "at N=11" (skipped on the previous mesh)
+        assert found["error"] and all(str(r).startswith(found["error"]) for r in rows["reason"]), rows["reason"]
 
 
 def test_a_driver_edit_reruns_only_the_peer_jobs(built_repo, tmp_path):

@@ -8,7 +8,10 @@ from pathlib import Path
 SRC = str(Path(workflow.basedir) / "src")
 sys.path.insert(0, SRC)
 os.environ.update(
-    PYTHONPATH=os.pathsep.join(p for p in (SRC, os.environ.get("PYTHONPATH")) if p)
+    PYTHONPATH=os.pathsep.join(p for p in (SRC, os.environ.get("PYTHONPATH")) if p),
+    # the jobs end quietly on Ctrl-C (signorini/__init__.py); this process imported the package
+    # already (the Snakefile), so Snakemake's own handling of Ctrl-C stays as it is
+    SIGNORINI_JOB_INTERRUPT="quiet",
 )
 
 from signorini.fem.norm_names import true_name
