@@ -333,14 +333,14 @@ def check_config(config: Mapping, mem_limit_mb: int | None = None, node: NodeLim
 def main(argv: Sequence[str] | None = None) -> int:
     """``python -m signorini.pipeline.config [FILE ...]``: check the workflow config with the given
     ``--configfile`` files merged in, as a run would (syntax with file and line, schema, semantics)."""
-    from snakemake.utils import update_config, validate
+    from snakemake.utils import update_config
 
     files = [DEFAULT_CONFIG, *(sys.argv[1:] if argv is None else argv)]
     try:
         config: dict = {}
         for path in files:
             update_config(config, load_yaml(path))
-        validate(config, SCHEMA)
+        validate_config(config, SCHEMA)
         check_config(config)
     except Exception as err:  # schema errors come as snakemake's WorkflowError
         print(f"config check failed: {err}", file=sys.stderr)
