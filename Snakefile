@@ -3,7 +3,7 @@
 import os
 import sys
 
-from snakemake.utils import min_version, validate
+from snakemake.utils import min_version
 
 min_version("9.0")
 
@@ -14,10 +14,17 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 # Snakemake names no file or line for a YAML syntax error in a config file: check this one first
 # (python -m signorini.pipeline.config my.yaml checks files given with --configfile).
 sys.path.insert(0, os.path.join(workflow.basedir, "src"))
-from signorini.pipeline.config import DEFAULT_CONFIG, SCHEMA, load_yaml
+from signorini.pipeline.config import (
+    DEFAULT_CONFIG,
+    SCHEMA,
+    load_yaml,
+    one_line_errors,
+    validate_config,
+)
 
 # the config and schema next to this file, whatever the working directory (-d, -s)
-load_yaml(os.path.join(workflow.basedir, DEFAULT_CONFIG))
+with one_line_errors():
+    load_yaml(os.path.join(workflow.basedir, DEFAULT_CONFIG))
 
 
 configfile: os.path.join(workflow.basedir, DEFAULT_CONFIG)
@@ -26,8 +33,10 @@ configfile: os.path.join(workflow.basedir, DEFAULT_CONFIG)
 # jsonschema would import rfc3987_syntax (a notebook dependency's extra; it compiles 38 lark
 # grammars, about 1 s) for a string format this schema never uses: leave it out.
 sys.modules.setdefault("rfc3987_syntax", None)
-# also fills in the schema's defaults (diagonal, solver_options, conventions, figures_scene)
-validate(config, os.path.join(workflow.basedir, SCHEMA))
+# one line naming the field, the value and what is allowed; also fills in the schema's defaults
+# (diagonal, solver_options, conventions, figures_scene)
+with one_line_errors():
+    validate_config(config, os.path.join(workflow.basedir, SCHEMA))
 
 
 report: "workflow/report/workflow.rst"

@@ -21,7 +21,7 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 import yaml  # noqa: E402
-from helpers import PROBLEM, copy_repo, snakemake  # noqa: E402
+from helpers import PROBLEM, TEST_PEER_PYTHON, copy_repo, snakemake  # noqa: E402
 
 from signorini.fem.discrete import build  # noqa: E402
 from signorini.fem.problem import Problem  # noqa: E402
@@ -110,6 +110,7 @@ TEST_SCENES = {
                 },
             },
             "qp_solvers": ["OSQP"],
+            "peer_python": TEST_PEER_PYTHON,
         },
     },
     "stability": {

@@ -13,9 +13,14 @@ import subprocess
 import sys
 from pathlib import Path
 
+from signorini.studies.work_precision.study import PEER_PYTHON
+
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
 PROBLEM = {"x0": 0.5, "R": 0.45, "A": 10, "c": 1}
+# the PETSc peers' interpreter of the tests (default: the study's, /usr/bin/python3); .ci/run sets
+# one without numpy for a second pass, so that the "skipped, with the reason" route is tested too
+TEST_PEER_PYTHON = os.environ.get("SIGNORINI_TEST_PEER_PYTHON") or PEER_PYTHON
 
 
 def copy_repo(dest: Path) -> Path:

@@ -129,7 +129,9 @@ def test_package_inits_import_nothing():
     for path in sorted(PACKAGE.rglob("__init__.py")):
         if path.parent.name == "solvers":  # the solvers' public interface, one unit
             continue
-        assert not imported_names(path), f"{path.relative_to(ROOT)} imports something"
+        # the top-level init may set the jobs' Ctrl-C handler (stdlib os and signal only)
+        allowed = {"os", "signal"} if path == PACKAGE / "__init__.py" else set()
+        assert not imported_names(path) - allowed, f"{path.relative_to(ROOT)} imports something"
 
 
 def test_no_function_longer_than_80_lines():

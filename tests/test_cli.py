@@ -74,6 +74,72 @@ def test_solve_command_rejects_bad_input():
         assert proc.returncode == 2 and proc.stderr.startswith("error:"), proc.stderr
 
 
+def run_cli(capsys, *args: str) -> tuple[int, str, str]:
+    """``python -m signorini solve ARGS`` in this process: exit code, stdout, stderr."""
+    from signorini.cli import main
+
+    code = main(["solve", *args])
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+@pytest.fixture
+def no_mesh(monkeypatch):
+    """Fails a test that meshes or allocates: a refused argument must stop the command first."""
+    import signorini.fem.discrete
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the mesh was built")
+
+    monkeypatch.setattr(signorini.fem.discrete, "build", refuse)
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--N", "0"], "error: --N: 0 is not allowed; a mesh has at least 1 cell per side (N ≥ 1)"),
+        (["--N", "-5"], "error: --N: -5 is not allowed; a mesh has at least 1 cell per side (N ≥ 1)"),
+        (["--N", "100000000"], "error: --N: N = 100000000 needs about 2.0e+10 GB for its solve job"),
+        (["--N", "11", "--norms", ""], "error: --norms: no norm given; name at least one"),
+        (["--N", "11", "--norms", "L4,W1_4"], "error: --norms[1]: unknown norm 'W1_4'; a norm is L or W1 followed"),
+        (["--N", "11", "--norms", "L1,L1.0"], "error: --norms[1]: 'L1.0' is the norm L1; write it L1"),
+        (["--N", "11", "--norms", "L4,L4"], "error: --norms[1]: L4 is listed twice (also --norms[0])"),
+        (["--N", "11", "--A", "1e-320"], "error: --A: 1e-320 is too small: at N = 11 the errors"),
+        (["--N", "11", "--A", "0"], "error: --A: 0 makes u ≡ 0 and every error vanish"),
+        (["--N", "11", "--x0", "2"], "error: --x0/--R/--A/--c: x0=2.0 must lie strictly inside"),
+        (["--N", "11", "--vtk", "."], "error: --vtk: . is a directory; give a file name"),
+        (["--N", "11", "--vtk", "no/such/dir/u.vtu"], "error: --vtk: the directory no/such/dir does not exist"),
+    ],
+)
+def test_the_cli_refuses_what_the_config_check_refuses(capsys, no_mesh, args, message):
+    """One line naming the option, exit code 2, before any mesh is built (the memory estimate of
+    ``pipeline.resources`` refuses an impossible mesh before it is allocated)."""
+    code, out, err = run_cli(capsys, *args)
+    assert code == 2 and out == "" and err.startswith(message) and err.count("\n") == 1, err
+
+
+def test_the_cli_and_the_config_check_give_the_same_message(capsys, no_mesh):
+    """One implementation: the config's message with the option in place of the field."""
+    import yaml
+    from helpers import ROOT
+
+    from signorini.pipeline.config import ConfigError, check_config
+
+    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text(encoding="utf-8"))
+    config["scenes"]["smoke"]["problem"]["A"] = 1e-320
+    config["scenes"]["smoke"]["N"] = [11]
+    config["figures_scene"] = "paper"
+    with pytest.raises(ConfigError) as info:
+        check_config(config)
+    _, _, err = run_cli(capsys, "--N", "11", "--A", "1e-320")
+    assert str(info.value).replace("scenes.smoke.problem.A", "--A") == err.removeprefix("error: ").strip()
+
+
+def test_a_non_finite_norm_is_an_error(capsys):
+    code, out, err = run_cli(capsys, "--N", "8", "--norms", "L4,L99999")
+    assert code == 1 and "L99999 = inf is not a finite number" in err, (out, err)
+
+
 @pytest.mark.slow
 def test_vtk_rule_writes_a_scene_solution(built_repo, tmp_path):
     repo = clone_built(built_repo, tmp_path / "repo")

@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import yaml
-from helpers import PROBLEM, ROOT, clone_built, planned, snakemake
+from helpers import PROBLEM, ROOT, TEST_PEER_PYTHON, clone_built, planned, snakemake
 
 from signorini.pipeline.paths import PEER_DRIVER
 from signorini.studies.scene.discretise import discretise_stage
@@ -27,7 +27,7 @@ from signorini.studies.scene.solve import solve_stage
 from signorini.studies.scene.store import SceneMesh
 from signorini.studies.work_precision import measure as wp
 from signorini.studies.work_precision import peers
-from signorini.studies.work_precision.study import PEER_PYTHON, SolverConfig, study_configs
+from signorini.studies.work_precision.study import SolverConfig, study_configs
 
 DRIVER = ROOT / PEER_DRIVER
 NORMS = ["L4", "W14", "Linf"]
@@ -44,7 +44,7 @@ def _driver():
 @pytest.fixture(scope="module")
 def petsc_probe() -> dict:
     """The driver's probe under the peer interpreter; skips (or fails in CI) without petsc4py."""
-    found = peers.probe(PEER_PYTHON, DRIVER)
+    found = peers.probe(TEST_PEER_PYTHON, DRIVER)
     if not found.get("petsc4py"):
         if REQUIRED:
             pytest.fail(f"SIGNORINI_REQUIRE_PEERS=1 but {found.get('error')}")
@@ -125,18 +125,58 @@ def _system(tmp: Path, N: int) -> dict:
     }
 
 
-@pytest.mark.parametrize("python", ["/nonexistent/python3", "project"])
-def test_without_petsc4py_the_peers_are_skipped(tmp_path, python):
-    """No interpreter, or one without (a compatible) petsc4py: every run ``skipped`` with the reason."""
-    python = sys.executable if python == "project" else python
+def _interpreter(tmp: Path, kind: str) -> str:
+    """A peer interpreter that cannot run the peers: missing, ours (numpy, no petsc4py), one
+    without numpy (site-packages off), one whose petsc4py fails to import, one that crashes, not
+    executable, one that prints something else than the probe's JSON."""
+    if kind == "missing":
+        return "/nonexistent/python3"
+    if kind == "project":
+        return sys.executable
+    script = tmp / f"python-{kind}"
+    body = {
+        "no_numpy": f'exec "{sys.executable}" -S -I "$@"',
+        "broken_petsc4py": f'PYTHONPATH="{tmp / "fake"}" exec "{sys.executable}" "$@"',
+        "crash": "echo 'Segmentation fault' >&2; exit 139",
+        "not_executable": "",
+        "garbage": "echo 'Welcome to Python'",
+    }[kind]
+    fake = tmp / "fake/petsc4py"
+    fake.mkdir(parents=True)
+    (fake / "__init__.py").write_text("raise RuntimeError('petsc4py built against another PETSc')\n")
+    script.write_text(f"#!/bin/sh\n{body}\n")
+    script.chmod(0o644 if kind == "not_executable" else 0o755)
+    return str(script)
+
+
+INTERPRETERS = {
+    "missing": "not found",
+    "project": "petsc4py not importable",
+    "no_numpy": "numpy not importable",
+    "broken_petsc4py": "RuntimeError: petsc4py built against another PETSc",
+    "crash": "Segmentation fault",
+    "not_executable": "PermissionError",
+    "garbage": "not the probe's JSON answer: Welcome to Python",
+}
+
+
+@pytest.mark.parametrize("kind", sorted(INTERPRETERS))
+def test_any_failure_to_start_the_peer_is_unavailable_with_its_reason(tmp_path, kind):
+    found = peers.probe(_interpreter(tmp_path, kind), DRIVER)
+    assert found["petsc4py"] is False and INTERPRETERS[kind] in found["error"], found
+
+
+@pytest.mark.parametrize("kind", ["missing", "project", "no_numpy"])
+def test_without_petsc4py_the_peers_are_skipped(tmp_path, kind):
+    """No interpreter, or one without (a compatible) petsc4py or numpy: every run ``skipped`` with the reason."""
+    python = _interpreter(tmp_path, kind)
     inputs = _system(tmp_path, 11)
     spec = SolverConfig("p", "petsc_snes", "p", {"snes_type": "vinewtonrsls"}).as_dict()
     at = SceneMesh(PROBLEM, 11, "sw_ne")
     info = wp.measure_stage(at, spec, [1e-6], 30.0, inputs, tmp_path / "out.json", peer_python=python)
     records = info["records"]
     assert [r["status"] for r in records] == ["skipped", "skipped"]
-    want = "not found" if python.startswith("/nonexistent") else "petsc4py not importable"
-    assert all(want in r["reason"] for r in records) and not info["peer"]["petsc4py"]
+    assert all(INTERPRETERS[kind] in r["reason"] for r in records) and not info["peer"]["petsc4py"]
 
 
 # the status at tolerance 1e-10 of each shipped peer on N = 21 and 41 (PETSc 3.18, Debian 12)
@@ -169,7 +209,7 @@ def test_peer_smoke(tmp_path, petsc_probe, N):
     got = {}
     for name, config in configs.items():
         out = tmp_path / f"{name}.json"
-        info = wp.measure_stage(at, config.as_dict(), [1e-10], 120.0, inputs, out, peer_python=PEER_PYTHON)
+        info = wp.measure_stage(at, config.as_dict(), [1e-10], 120.0, inputs, out, peer_python=TEST_PEER_PYTHON)
         default, tight = info["records"]
         assert default["status"] in ("ok", "inaccurate", "failed"), (name, default)
         got[name] = tight["status"]
@@ -184,17 +224,21 @@ def test_peer_smoke(tmp_path, petsc_probe, N):
 
 
 def test_peers_in_the_small_study(built_repo):
-    """The built copy's study has one peer: certified rows when petsc4py is there, skipped ones otherwise."""
+    """The built copy's study has one peer: certified rows when petsc4py is there; otherwise,
+    whatever kept the peer from starting, skipped rows that give the probe's reason."""
     df = pd.read_csv(built_repo / "paper_figures/work_precision.csv")
     rows = df[df["config"] == "petsc_tron"]
     assert len(rows) == 2 * 3  # N = 11, 21: default and two tolerances
-    if peers.probe(PEER_PYTHON, DRIVER).get("petsc4py"):
+    found = peers.probe(TEST_PEER_PYTHON, DRIVER)
+    if found.get("petsc4py"):
         tight = rows[rows["tol_label"] == "1e-08"]
         assert set(tight["status"]) == {"ok"} and (tight["kkt_worst"] <= 1e-8).all()
         assert tight["converged_reason"].str.startswith("CONVERGED").all() and (tight["setup_s"] > 0).all()
         assert "## PETSc peers" in (built_repo / "paper_figures/work_precision.md").read_text()
     else:
-        assert set(rows["status"]) == {"skipped"} and rows["reason"].str.contains("petsc4py|not found").all()
+        assert set(rows["status"]) == {"skipped"}
+        # N = 11 gives the probe's reason; N = 21 the same, "at N=11" (skipped on the previous mesh)
+        assert found["error"] and all(str(r).startswith(found["error"]) for r in rows["reason"]), rows["reason"]
 
 
 def test_a_driver_edit_reruns_only_the_peer_jobs(built_repo, tmp_path):

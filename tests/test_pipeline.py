@@ -39,9 +39,9 @@ def load_config() -> dict:
 
 def validate(config: dict) -> None:
     """What the Snakefile does: schema validation, then the semantic checks."""
-    from snakemake.utils import validate as smk_validate
+    from signorini.pipeline.config import validate_config
 
-    smk_validate(config, str(ROOT / "workflow/schemas/config.schema.yaml"))
+    validate_config(config, ROOT / "workflow/schemas/config.schema.yaml")
     check_config(config)
 
 
@@ -60,13 +60,13 @@ def test_shipped_config_is_valid():
         (("norms", 0), "L4x", ["norms", "L4x"]),  # unknown norm: schema pattern
         (("norms", 0), "L0.5", ["norms[0]", "p ≥ 1"]),  # passes the pattern, parse_norm rejects it
         (("solver",), "gurobi", ["solver", "gurobi"]),
-        (("N", 0), 0, ["N", "minimum"]),
+        (("N", 0), 0, ["N[0]", "0", "≥ 1"]),
         (("N", 0), -3, ["N"]),
         (("N", 1), 201.5, ["N", "integer"]),
         (("N", 1), 201.0, ["N[1]", "not an integer"]),  # JSON schema counts 201.0 as integer
         (("N", 1), "201", ["N", "integer"]),
-        (("N",), 101, ["N", "array"]),
-        (("norms",), "L4", ["norms", "array"]),
+        (("N",), 101, ["N", "a list"]),
+        (("norms",), "L4", ["norms", "a list"]),
         (("problem", "x0"), "half", ["x0", "number"]),
         (("problem", "R"), 0.6, ["problem", "R"]),  # support leaves the square: Problem rejects it
         (("nroms",), ["L4"], ["nroms"]),  # a typo in a key

@@ -30,24 +30,71 @@ def _parser() -> argparse.ArgumentParser:
             f"--{name}", type=float, default=getattr(defaults, name), help=f"{text} (default %(default)s)"
         )
     solve.add_argument("--diagonal", choices=DIAGONALS, default=DEFAULT_DIAGONAL)
-    solve.add_argument("--norms", default="", help="comma-separated norm names of u - u_h, e.g. L4,W14,H12")
+    solve.add_argument("--norms", help="comma-separated norm names of u - u_h, e.g. L4,W14,H12")
     solve.add_argument("--vtk", metavar="PATH", help="write u_h, u, the error, λ and the contact set as .vtu")
     solve.add_argument("--verbose", action="store_true", help="log the active-set method's Newton steps")
     return parser
 
 
+class UsageError(ValueError):
+    """An argument the command cannot use; the message names the option."""
+
+
+def check_arguments(args: argparse.Namespace) -> tuple[Problem, list[str]]:
+    """The problem and the norm names, checked as the workflow's config is (the same functions of
+    ``signorini.pipeline.config``, the same messages, with the option as the field), and the
+    memory the mesh needs, before anything is allocated.  Raises ``UsageError``."""
+    from signorini.fem.problem import ProblemParameterError
+    from signorini.pipeline.config import (
+        ConfigError,
+        check_amplitude,
+        check_memory,
+        check_mesh_size,
+        check_norm_names,
+    )
+    from signorini.pipeline.resources import machine_mem_mb
+
+    try:
+        check_mesh_size("--N", args.N)
+        check_memory("--N", args.N, machine_mem_mb(), "of this machine")
+        names = [] if args.norms is None else [n.strip() for n in args.norms.split(",")]
+        if args.norms is not None:  # given, so at least one name: --norms '' is an error
+            names = [] if names == [""] else names
+            check_norm_names("--norms", names)
+        try:
+            problem = Problem(x0=args.x0, R=args.R, A=args.A, c=args.c)
+        except ProblemParameterError as err:
+            raise ConfigError(f"--x0/--R/--A/--c: {err}") from None
+        check_amplitude("--A", problem.A, problem.R, [args.N])
+        if args.vtk:
+            _check_output("--vtk", args.vtk)
+    except ConfigError as err:
+        raise UsageError(str(err)) from None
+    return problem, names
+
+
+def _check_output(option: str, path: str) -> None:
+    from pathlib import Path
+
+    from signorini.pipeline.config import ConfigError
+
+    target = Path(path)
+    if target.is_dir():
+        raise ConfigError(f"{option}: {path} is a directory; give a file name, e.g. {target / 'solution.vtu'}")
+    if not target.parent.is_dir():
+        raise ConfigError(f"{option}: the directory {target.parent} does not exist")
+
+
 def solve_command(args: argparse.Namespace) -> int:
+    import math
+
     from signorini.fem.discrete import build
-    from signorini.fem.norm_names import UnknownNormError, parse_norm_name
     from signorini.fem.solve import solve_discrete
     from signorini.fem.true_norms import evaluate_named_norms
 
-    names = [n for n in args.norms.split(",") if n]
     try:
-        for name in names:
-            parse_norm_name(name)
-        problem = Problem(x0=args.x0, R=args.R, A=args.A, c=args.c)
-    except (UnknownNormError, ValueError) as err:
+        problem, names = check_arguments(args)
+    except UsageError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
     t0 = time.perf_counter()
@@ -69,6 +116,10 @@ def solve_command(args: argparse.Namespace) -> int:
         values = evaluate_named_norms(problem, disc.mesh, result.u, names)
         norms = ", ".join(f"{name} {value:.6e}" for name, value in values.items())
         print(f"‖u − u_h‖: {norms} ({time.perf_counter() - t3:.2f} s)")
+        bad = [f"{name} = {value}" for name, value in values.items() if not math.isfinite(value)]
+        if bad:
+            print(f"error: --norms: {', '.join(bad)} is not a finite number; no error is reported", file=sys.stderr)
+            return 1
     if args.vtk:
         from signorini.vtu import solution_fields, write_vtu
 

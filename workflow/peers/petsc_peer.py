@@ -39,7 +39,12 @@ import os
 import sys
 import time
 
-import numpy as np
+try:  # the probe must answer (as JSON) under an interpreter without numpy too
+    import numpy as np
+except ImportError as _err:
+    np, NUMPY_ERROR = None, _err
+else:
+    NUMPY_ERROR = None
 
 # Debian's petsc4py finds its modules through $PETSC_DIR, else through the /usr/lib/petsc
 # alternative, which only the PETSc development package creates
@@ -111,6 +116,8 @@ def try_inner(PETSc, pc_type: str, factor: str | None = None) -> str:
 
 def probe() -> dict:
     """What this PETSc offers: version and every inner solver the peers may ask for."""
+    if NUMPY_ERROR is not None:
+        return {"petsc4py": False, "error": f"numpy not importable by {sys.executable}: {NUMPY_ERROR}"}
     try:
         PETSc = import_petsc()
     except Exception as err:  # ImportError, or a petsc4py built against another numpy (ValueError)

@@ -25,7 +25,10 @@ if shlex.quote(sys.executable) != sys.executable and "conda" not in _deploy:
 SRC = str(Path(workflow.basedir) / "src")
 sys.path.insert(0, SRC)
 os.environ.update(
-    PYTHONPATH=os.pathsep.join(p for p in (SRC, os.environ.get("PYTHONPATH")) if p)
+    PYTHONPATH=os.pathsep.join(p for p in (SRC, os.environ.get("PYTHONPATH")) if p),
+    # the jobs end quietly on Ctrl-C (signorini/__init__.py); this process imported the package
+    # already (the Snakefile), so Snakemake's own handling of Ctrl-C stays as it is
+    SIGNORINI_JOB_INTERRUPT="quiet",
 )
 
 from signorini.fem.norm_names import true_name
@@ -33,7 +36,7 @@ from signorini.paper import FIGURE3_NORMS, TABLE1_NORMS, TABLE2_NORMS
 from signorini.pipeline import paths, resources
 from signorini.pipeline.artifacts import code_digest
 from signorini.pipeline.codedeps import ImportCache, code_inputs
-from signorini.pipeline.config import ConfigError, check_config
+from signorini.pipeline.config import ConfigError, check_config, one_line_errors
 from signorini.studies.stability import atlas as stab_atlas
 from signorini.studies.work_precision import study as wp_study
 
@@ -60,11 +63,17 @@ def slurm_node(workflow):
     return node
 
 
-# integer N, norm names of the grammar, admissible problem parameters
+# integer N, norm names of the grammar, admissible problem parameters; atlas blocks (case names,
+# groups, problems, solver columns); study blocks (reuse of the source scene's artifacts): one line
 _mem_limit = getattr(workflow, "global_resources", {}).get(
     "mem_mb"
 )  # --resources / profile
-check_config(config, getattr(_mem_limit, "value", _mem_limit))
+with one_line_errors(stab_atlas.AtlasConfigError, wp_study.StudyConfigError):
+    check_config(config, getattr(_mem_limit, "value", _mem_limit))
+    stab_atlas.check_atlases(config)
+    for _name, _scene in config["scenes"].items():
+        if "study" in _scene:
+            wp_study.check_study(config["scenes"], _name)
 
 
 # Through Slurm, every scene job's memory and run-time request must fit the largest node of the
@@ -73,13 +82,6 @@ check_config(config, getattr(_mem_limit, "value", _mem_limit))
 onstart:
     if (node := slurm_node(workflow)) is not None:
         check_config(config, getattr(_mem_limit, "value", _mem_limit), node=node)
-
-
-# atlas blocks: case names, groups, problems, solver columns
-stab_atlas.check_atlases(config)
-for _name, _scene in config["scenes"].items():
-    if "study" in _scene:  # study blocks: reuse of the source scene's artifacts
-        wp_study.check_study(config["scenes"], _name)
 
 
 wildcard_constraints:

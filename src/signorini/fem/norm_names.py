@@ -27,6 +27,12 @@ from dataclasses import dataclass
 _PATTERN = re.compile(r"^(?P<family>L|W1)(?P<p>inf|\d+(?:\.\d+)?)(?P<part>plus|minus)?$")
 BOUNDARY_NORMS = ("H12", "L2boundary")  # norms of the trace on ∂Ω
 TRUE_SUFFIX = "_true"  # the converged evaluation of the same norm
+# the grammar in words (what error messages say)
+GRAMMAR = (
+    "a norm is L or W1 followed by an exponent p ≥ 1 (a number such as 4 or 2.5, or inf: L4, Linf, W14, "
+    "W1inf), Lp or Linf followed by plus or minus (one-sided), H1, H12 or L2boundary; each may end in "
+    f"{TRUE_SUFFIX} (converged evaluation)"
+)
 
 
 class UnknownNormError(ValueError):
@@ -77,14 +83,22 @@ def parse_norm_name(name: str) -> NormName:
         return NormName(name, base, None, true=true)
     m = _PATTERN.match(base)
     if m is None or (m["family"] == "W1" and m["part"]):
-        raise UnknownNormError(
-            f"unknown norm {name!r}; use Lp, Linf, W1p, W1inf (p ≥ 1), H1, H12, L2boundary, or Lp/Linf with "
-            f"plus/minus, each optionally with the suffix {TRUE_SUFFIX} (converged evaluation)"
-        )
+        raise UnknownNormError(f"unknown norm {name!r}; {GRAMMAR}")
     p = math.inf if m["p"] == "inf" else float(m["p"])
     if p < 1.0:
         raise UnknownNormError(f"norm {name!r}: need p ≥ 1")
     return NormName(name, m["family"], p, m["part"] or "", true=true)
+
+
+def canonical_norm_name(name: str) -> str:
+    """The one spelling of the norm ``name`` names (``L1.0``, ``L01`` → ``L1``; ``W12.50`` →
+    ``W12.5``); raises ``UnknownNormError`` outside the grammar."""
+    spec = parse_norm_name(name)
+    suffix = TRUE_SUFFIX if spec.true else ""
+    if spec.family in ("L", "W1"):
+        lp, w1p = lp_names(spec.p)
+        return (lp + spec.part if spec.family == "L" else w1p) + suffix
+    return spec.family + suffix
 
 
 def true_name(name: str) -> str:

@@ -15,6 +15,7 @@ from signorini.pipeline.artifacts import changed_input, code_digest, content_dig
 
 log = logging.getLogger("signorini.job")
 MODULES_LINE = "modules run: %s"  # the last line of a job's log file
+INTERRUPTED = 130  # a job's exit status after Ctrl-C (128 + SIGINT; signorini/__init__.py)
 
 
 def loaded_modules() -> list[str]:
@@ -60,9 +61,10 @@ def job_provenance(job: Any) -> dict:
 
 @contextlib.contextmanager
 def job_log(job: Any) -> Iterator[logging.Logger]:
-    """Log to the job's log file (and stderr); an exception is logged with its traceback, then
-    re-raised.  ``job``: the Snakemake job object of a script (its log file, and the provenance
-    every artifact it writes records: ``job_provenance``), or just a log path (or None).  The log
+    """Log to the job's log file (and its warnings to stderr; everything there without a file); an
+    exception is logged with its traceback, then re-raised (Ctrl-C: one line, in the file only).
+    ``job``: the Snakemake job object of a script (its log file, and the provenance every artifact
+    it writes records: ``job_provenance``), or just a log path (or None).  The log
     file's last line names the package modules the job ran (``loaded_modules``), which the tests
     compare with the rule's code inputs."""
     path, provenance = (
@@ -71,8 +73,11 @@ def job_log(job: Any) -> Iterator[logging.Logger]:
     if provenance is not None:
         check_inputs(list(provenance["inputs"]))
     root = logging.getLogger()
-    handlers: list[logging.Handler] = [logging.StreamHandler(sys.stderr)]
+    console = logging.StreamHandler(sys.stderr)
+    handlers: list[logging.Handler] = [console]
     if path:
+        # with a log file the console gets the warnings only: a run prints a line per job, not its steps
+        console.setLevel(logging.WARNING)
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         handlers.append(logging.FileHandler(path, mode="w", encoding="utf-8"))
     file_handlers = handlers[1:]
@@ -89,8 +94,12 @@ def job_log(job: Any) -> Iterator[logging.Logger]:
         record = log.makeRecord(log.name, logging.INFO, __file__, 0, MODULES_LINE, (" ".join(loaded_modules()),), None)
         for handler in file_handlers:  # the log file only: the console stays short
             handler.handle(record)
-    except BaseException:
-        log.exception("job failed")
+    except BaseException as err:
+        if isinstance(err, KeyboardInterrupt) or (isinstance(err, SystemExit) and err.code == INTERRUPTED):
+            console.setLevel(logging.CRITICAL + 1)  # Ctrl-C: said in the log file, not on the console
+            log.warning("job interrupted")
+        else:
+            log.exception("job failed")
         raise
     finally:
         for handler in handlers:

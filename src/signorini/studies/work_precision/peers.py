@@ -53,19 +53,34 @@ class PeerRoute:
 
 def probe(python: str | None, driver: str | os.PathLike) -> dict:
     """The driver's ``probe`` under ``python``: PETSc version and inner solvers, or
-    ``{"petsc4py": False, "error": why}`` (interpreter missing, petsc4py not importable, …)."""
+    ``{"petsc4py": False, "error": why}`` for any failure to start the peer (interpreter missing
+    or not executable, numpy or petsc4py not importable, the driver crashing, an answer that is
+    not the probe's JSON): the peers are then unavailable, and their runs skipped with ``why``."""
     python = python or PEER_PYTHON
     if not Path(python).exists():
-        return {"petsc4py": False, "error": f"peer interpreter {python} not found"}
+        return _unavailable(f"peer interpreter {python} not found")
     try:
         proc = subprocess.run(
             [python, str(driver), "probe"], capture_output=True, encoding="utf-8", timeout=PROBE_TIMEOUT_S, env=_env()
         )
-    except (OSError, subprocess.TimeoutExpired) as err:
-        return {"petsc4py": False, "error": f"peer interpreter {python}: {type(err).__name__}: {err}"}
+    except (OSError, subprocess.SubprocessError) as err:
+        return _unavailable(f"peer interpreter {python}: {type(err).__name__}: {err}")
+    where = f"{python} {Path(driver).name} probe"
     if proc.returncode != 0:
-        return {"petsc4py": False, "error": f"{python} {Path(driver).name} probe: {_last_line(proc.stderr)}"}
-    return json.loads(proc.stdout)
+        return _unavailable(f"{where}: {_last_line(proc.stderr)}")
+    try:
+        found = json.loads(proc.stdout)
+    except ValueError:
+        return _unavailable(f"{where}: not the probe's JSON answer: {_last_line(proc.stdout)}")
+    if not isinstance(found, dict) or "petsc4py" not in found:
+        return _unavailable(f"{where}: not the probe's JSON answer: {_last_line(proc.stdout)}")
+    if not found["petsc4py"]:
+        found.setdefault("error", f"{where}: petsc4py unavailable (no reason given)")
+    return found
+
+
+def _unavailable(reason: str) -> dict:
+    return {"petsc4py": False, "error": reason}
 
 
 def _env() -> dict[str, str]:
