@@ -20,11 +20,12 @@ import pytest
 import yaml
 from helpers import PROBLEM, ROOT, clone_built, planned, snakemake
 
+from signorini.fem.discrete import DiscreteProblem
 from signorini.pipeline.paths import PEER_DRIVER
 from signorini.studies.scene.discretise import discretise_stage
 from signorini.studies.scene.norm import norm_stage
 from signorini.studies.scene.solve import solve_stage
-from signorini.studies.scene.store import SceneMesh
+from signorini.studies.scene.store import SceneMesh, load_system
 from signorini.studies.work_precision import measure as wp
 from signorini.studies.work_precision import peers
 from signorini.studies.work_precision.study import PEER_PYTHON, SolverConfig, study_configs
@@ -32,6 +33,7 @@ from signorini.studies.work_precision.study import PEER_PYTHON, SolverConfig, st
 DRIVER = ROOT / PEER_DRIVER
 NORMS = ["L4", "W14", "Linf"]
 REQUIRED = os.environ.get("SIGNORINI_REQUIRE_PEERS") == "1"
+FAST = {"wait_s": 0.0, "retries": 0, "min_repeats": 1, "budget_s": 1.0}  # no waiting for a quiet machine
 
 
 def _driver():
@@ -132,7 +134,7 @@ def test_without_petsc4py_the_peers_are_skipped(tmp_path, python):
     inputs = _system(tmp_path, 11)
     spec = SolverConfig("p", "petsc_snes", "p", {"snes_type": "vinewtonrsls"}).as_dict()
     at = SceneMesh(PROBLEM, 11, "sw_ne")
-    info = wp.measure_stage(at, spec, [1e-6], 30.0, inputs, tmp_path / "out.json", peer_python=python)
+    info = wp.measure_stage(at, spec, [1e-6], 30.0, inputs, tmp_path / "out.json", peer_python=python, timing=FAST)
     records = info["records"]
     assert [r["status"] for r in records] == ["skipped", "skipped"]
     want = "not found" if python.startswith("/nonexistent") else "petsc4py not importable"
@@ -169,7 +171,8 @@ def test_peer_smoke(tmp_path, petsc_probe, N):
     got = {}
     for name, config in configs.items():
         out = tmp_path / f"{name}.json"
-        info = wp.measure_stage(at, config.as_dict(), [1e-10], 120.0, inputs, out, peer_python=PEER_PYTHON)
+        spec = config.as_dict()
+        info = wp.measure_stage(at, spec, [1e-10], 120.0, inputs, out, peer_python=PEER_PYTHON, timing=FAST)
         default, tight = info["records"]
         assert default["status"] in ("ok", "inaccurate", "failed"), (name, default)
         got[name] = tight["status"]
@@ -204,3 +207,57 @@ def test_a_driver_edit_reruns_only_the_peer_jobs(built_repo, tmp_path):
     jobs = planned(snakemake(repo, "-n", "work_precision"))
     measured = {(wc["N"], wc["solver"]) for rule, wc in jobs if rule == "work_precision_measure"}
     assert measured == {("11", "petsc_tron"), ("21", "petsc_tron")}
+
+
+def test_same_warm_start_variants():
+    """``same_warm_start``: every peer gets a ``_ws`` variant started from the cascade; the
+    others do not (cvxpy's QP interfaces take no initial guess); below the cascade's first
+    coarse level the variant's runs are skipped with the reason."""
+    study = {
+        "configs": {
+            "as": {"solver": "active_set"},
+            "tron": {"solver": "petsc_tao", "label": "TRON", "options": {"tao_type": "tron"}},
+        },
+        "qp_solvers": ["OSQP"],
+        "same_warm_start": True,
+    }
+    configs = study_configs(study)
+    assert list(configs) == ["as", "tron", "osqp", "tron_ws"]
+    assert configs["tron_ws"].initial == "cascade" and configs["tron_ws"].label == "TRON (cascade start)"
+    assert configs["tron"].initial == "cold" and configs["as"].initial == "cascade"
+    assert SolverConfig(**configs["tron_ws"].as_dict()) == configs["tron_ws"]  # the rule's params round trip
+
+
+def test_a_warm_started_peer_below_the_cascade_is_skipped(tmp_path):
+    inputs = _system(tmp_path, 11)
+    spec = SolverConfig("p_ws", "petsc_tao", "p", {"tao_type": "tron"}, "cascade").as_dict()
+    at = SceneMesh(PROBLEM, 11, "sw_ne")
+    out = tmp_path / "out.json"
+    info = wp.measure_stage(at, spec, [1e-6], 30.0, inputs, out, peer_python=sys.executable, timing=FAST)
+    assert {r["status"] for r in info["records"]} == {"skipped"}
+    assert all(r["reason"].startswith("no cascade start below N = 96") for r in info["records"])
+    assert {r["start"] for r in info["records"]} == {"cascade"}
+
+
+@pytest.mark.peers
+@pytest.mark.parametrize("name", ["petsc_rsls_cholmod", "petsc_tron_boomeramg"])
+def test_peer_from_an_initial_guess(tmp_path, petsc_probe, name):
+    """The driver starts from the initial guess it is given: from the exact solution a SNES VI
+    Newton method and TAO TRON stop at once (≤ 1 iteration), from u = 0 they need more; the
+    answer is certified like every other.  Timed under the protocol (CPU time of the solve)."""
+    from signorini.studies.work_precision.timing import Protocol, ReferenceKernel, Timer
+
+    inputs = _system(tmp_path, 41)
+    config = shipped_peers()[name]
+    exact = np.load(inputs["exact"])["u"]
+    route = peers.PeerRoute(PEER_PYTHON, str(DRIVER), str(inputs["system"]), petsc_probe)
+    at = SceneMesh(PROBLEM, 41, "sw_ne")
+    A, b, boundary = load_system(inputs["system"], 41)
+    disc = DiscreteProblem(at.problem, 41, "sw_ne", at.mesh(), A, b, boundary)
+    timer, kernel = Timer(Protocol.from_mapping(FAST)), ReferenceKernel(A)
+    warm = peers.run_peer(config, route, disc, 1e-10, 120.0, timer, kernel, initial_guess=exact)
+    cold = peers.run_peer(config, route, disc, 1e-10, 120.0, timer, kernel)
+    assert warm.status == cold.status == "ok", (warm.reason, cold.reason)
+    assert warm.result.iterations <= 1 < cold.result.iterations
+    assert warm.extra["peer"]["start"] != "cold" and cold.extra["peer"]["start"] == "cold"
+    assert warm.extra["timing"]["time_runs"] >= 1 and warm.extra["timing"]["cpu_share"] > 0
