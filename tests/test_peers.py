@@ -96,17 +96,17 @@ def test_peer_answers_get_the_study_statuses(cache):
     → failed with its reason (answer kept); driver errors → failed; missing inner solver → skipped."""
     disc, exact = cache.discrete({}, 11), cache.solution({}, 11)
     config = SolverConfig("p", "petsc_tao", "p", {"tao_type": "tron"})
-    ok = peers._outcome(config, disc, 1e-10, _answer(), exact.u)
+    ok = peers.outcome(config, disc, 1e-10, _answer(), exact.u)
     assert ok.status == "ok" and ok.result.certificate.worst <= 1e-10 and ok.times == [0.01, 0.012]
     assert ok.extra["peer_info"] == "PETSc 3.18.5: tron ksp=stcg pc=cholesky/cholmod"
     assert ok.extra["setup_s"] == 0.002 and ok.extra["converged_reason"] == "CONVERGED_GTTOL"
-    bad = peers._outcome(config, disc, 1e-10, _answer(), exact.u * 1.01)
+    bad = peers.outcome(config, disc, 1e-10, _answer(), exact.u * 1.01)
     assert bad.status == "inaccurate" and bad.reason.startswith("KKT residual")
-    diverged = peers._outcome(config, disc, None, _answer(converged=False, reason="DIVERGED_MAXITS"), exact.u)
+    diverged = peers.outcome(config, disc, None, _answer(converged=False, reason="DIVERGED_MAXITS"), exact.u)
     assert diverged.status == "failed" and diverged.reason == "PETSc DIVERGED_MAXITS" and diverged.result is not None
-    error = peers._outcome(config, disc, None, {"status": "error", "reason": "PETSc error 60: sizes"}, None)
+    error = peers.outcome(config, disc, None, {"status": "error", "reason": "PETSc error 60: sizes"}, None)
     assert (error.status, error.reason, error.result) == ("failed", "PETSc error 60: sizes", None)
-    missing = peers._outcome(config, disc, None, {"status": "unavailable", "reason": "no mumps"}, None)
+    missing = peers.outcome(config, disc, None, {"status": "unavailable", "reason": "no mumps"}, None)
     assert (missing.status, missing.reason) == ("skipped", "no mumps")
 
 

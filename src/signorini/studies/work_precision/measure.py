@@ -121,6 +121,51 @@ def classify_failure(err: BaseException, elapsed: float, time_limit_s: float | N
     return "failed", f"{type(err).__name__}: {message[:240]}"
 
 
+def solver_options(config: SolverConfig, tol: float | None, limit: float | None) -> tuple[dict, float]:
+    """The options of an in-process solver call (a QP solver's time limit added) and the KKT
+    residual its answer must reach (``tol``, the solver's default tolerance, the certificate's 1e-10)."""
+    from signorini.solvers.cvxpy_qp import TOLERANCE_OPTIONS
+
+    options = dict(config.options)
+    if config.exact:
+        return options, float(options.get("kkt_tol", 1e-10))
+    if limit is not None and config.solver in TIME_LIMIT_OPTIONS:
+        options.setdefault(TIME_LIMIT_OPTIONS[config.solver], float(limit))
+    default = TOLERANCE_OPTIONS.get(config.solver, ((), math.nan))[1]
+    return options, float(tol) if tol is not None else float(default)
+
+
+def _in_process_call(config: SolverConfig, disc, tol: float | None, options: Mapping):
+    """The call of an active-set or cvxpy configuration, for ``timing.Timer``: ``(SolveResult, None)``."""
+    from signorini.fem.solve import solve_discrete
+    from signorini.solvers import cvxpy_solve
+
+    options = dict(options)
+    if config.exact:
+        warm = options.pop("warm_start", "cascade")
+        return lambda: (solve_discrete(disc, "active_set", warm_start=warm, **options), None)
+    return lambda: (cvxpy_solve(disc.A, disc.b, disc.boundary, config.solver, tol=tol, check=False, **options), None)
+
+
+def timed_call(
+    config: SolverConfig,
+    disc,
+    tol: float | None,
+    time_limit_s: float | None = None,
+    peer=None,
+    initial_guess: np.ndarray | None = None,
+):
+    """The call ``run_solver`` times, for a round-robin of several configurations
+    (``timing.round_robin``; ``benchmarks/``): in process ``(SolveResult, None)``; a peer
+    ``((answer, u), (solve wall s, solve CPU s))`` (``peers.driver_call``, ``peers.outcome``)."""
+    if config.peer:
+        from signorini.studies.work_precision.peers import driver_call
+
+        return driver_call(config, peer, tol, time_limit_s, initial_guess)
+    limit = None if config.exact else time_limit_s
+    return _in_process_call(config, disc, tol, solver_options(config, tol, limit)[0])
+
+
 def run_solver(
     config: SolverConfig,
     disc,
@@ -147,28 +192,11 @@ def run_solver(
 
         out = run_peer(config, peer, disc, tol, time_limit_s, timer, kernel, initial_guess)
         return Attempt(out.result, out.status, out.reason, out.times, out.extra)
-    from signorini.fem.solve import solve_discrete
-    from signorini.solvers import cvxpy_solve
-    from signorini.solvers.cvxpy_qp import TOLERANCE_OPTIONS
-
-    options = dict(config.options)
     limit = None if config.exact else time_limit_s
-    if config.exact:
-        warm = options.pop("warm_start", "cascade")
-        required = float(options.get("kkt_tol", 1e-10))
-    else:
-        if limit is not None and config.solver in TIME_LIMIT_OPTIONS:
-            options.setdefault(TIME_LIMIT_OPTIONS[config.solver], float(limit))
-        default = TOLERANCE_OPTIONS.get(config.solver, ((), math.nan))[1]
-        required = float(tol) if tol is not None else float(default)
-
-    def call():
-        if config.exact:
-            return solve_discrete(disc, "active_set", warm_start=warm, **options), None
-        return cvxpy_solve(disc.A, disc.b, disc.boundary, config.solver, tol=tol, check=False, **options), None
-
+    options, required = solver_options(config, tol, limit)
     with _solver_log(config.solver) as (log_options, log_path):
         options.update(log_options)
+        call = _in_process_call(config, disc, tol, options)
         try:
             measured = timer.measure(call, kernel)
         except CallFailed as err:  # a failing solver is recorded, never raised
@@ -187,7 +215,7 @@ def run_solver(
     return Attempt(result, "ok", "", times, extra)
 
 
-def _warm_up(config: SolverConfig) -> None:
+def warm_up(config: SolverConfig) -> None:
     """Load the solver's libraries with a 3-unknown QP, so the first timed call pays no import."""
     if config.exact or config.peer:  # a peer starts a fresh process per run anyway
         return
@@ -396,7 +424,7 @@ def measure_stage(
         inp.peer = PeerRoute(python, driver, str(inputs["system"]), probe(python, driver))
     inp.timer = Timer(Protocol.from_mapping(timing))
     inp.kernel = ReferenceKernel(inp.disc.A)
-    _warm_up(config)
+    warm_up(config)
     no_start = _cascade_start(inp, config)
     norm_cache: dict[str, dict[str, float]] = {_fingerprint(inp.exact): inp.disc_err}
     records = []

@@ -169,12 +169,12 @@ def run_peer(
     if answer.get("status") in ("timeout", "error"):  # no solve to time: the wall time until the end
         times = [measured.samples[-1].wall_s] if answer["status"] == "timeout" else []
         return PeerOutcome(None, "failed", str(answer["reason"]), times, {"timing": {"load1": timing.get("load1")}})
-    out = _outcome(config, disc, tol, answer, u)
+    out = outcome(config, disc, tol, answer, u)
     out.extra["timing"] = timing
     return out
 
 
-def _outcome(config: SolverConfig, disc, tol: float | None, answer: dict, u) -> PeerOutcome:
+def outcome(config: SolverConfig, disc, tol: float | None, answer: dict, u) -> PeerOutcome:
     """Status, certificate and record fields of a driver's answer."""
     extra = {
         "setup_s": float(answer["setup_s"]) if "setup_s" in answer else float("nan"),
