@@ -191,6 +191,8 @@ def test_peers_in_the_small_study(built_repo):
     df = pd.read_csv(built_repo / "paper_figures/work_precision.csv")
     rows = df[df["config"] == "petsc_tron"]
     assert len(rows) == 2 * 3  # N = 11, 21: default and two tolerances
+    warm = df[df["config"] == "petsc_tron_ws"]  # below the cascade's first coarse level: no start to give
+    assert len(warm) == 2 * 3 and set(warm["status"]) == {"skipped"} and set(warm["start"]) == {"cascade"}
     if peers.probe(PEER_PYTHON, DRIVER).get("petsc4py"):
         tight = rows[rows["tol_label"] == "1e-08"]
         assert set(tight["status"]) == {"ok"} and (tight["kkt_worst"] <= 1e-8).all()
@@ -206,7 +208,7 @@ def test_a_driver_edit_reruns_only_the_peer_jobs(built_repo, tmp_path):
     driver.write_text(driver.read_text() + "\n# edited\n")
     jobs = planned(snakemake(repo, "-n", "work_precision"))
     measured = {(wc["N"], wc["solver"]) for rule, wc in jobs if rule == "work_precision_measure"}
-    assert measured == {("11", "petsc_tron"), ("21", "petsc_tron")}
+    assert measured == {(N, name) for N in ("11", "21") for name in ("petsc_tron", "petsc_tron_ws")}
 
 
 def test_same_warm_start_variants():

@@ -271,14 +271,17 @@ def test_small_study_end_to_end(built_repo):
         assert (out / name).stat().st_size > 1000, name
     df = pd.read_csv(out / "work_precision.csv")
     df = df[~df["solver"].str.startswith("petsc_")]  # the peer: tests/test_peers.py
-    assert len(df) == 2 * (1 + 3)  # per N: the active set, OSQP at its default and two tolerances
-    assert set(df["config"]) == {"active_set", "osqp"}
+    assert len(df) == 2 * (2 + 3)  # per N: the active set (cascade, cold), OSQP at its default and two tolerances
+    assert set(df["config"]) == {"active_set", "active_set_cold", "osqp"}
+    assert (df["time_runs"] >= 1).all() and (df["time_ref"] > 0).all() and (df["ref_s"] > 0).all()
+    assert set(df.loc[df["config"] == "active_set_cold", "start"]) == {"cold"}
     exact = df[df["config"] == "active_set"]
     assert (exact["alg_L4"] == 0).all() and (exact["total_L4"] == exact["disc_L4"]).all()
     assert set(df["status"]) <= {"ok", "inaccurate"}
     assert {c.split("_", 1)[1] for c in df.columns if c.startswith("alg_")} == {"L4", "W14"}
     md = (out / "work_precision.md").read_text()
-    assert "## Which tolerance keeps Table 1" in md and "Machine load" in md
+    assert "## Which tolerance keeps Table 1" in md and "Machine load during the measurements" in md
+    assert "**Timing protocol**" in md and "cold against cold: active set (cold)" in md
     # reused: the smoke scene's systems and solutions, none of the study scene's own
     assert (built_repo / "results/smoke/N21/solution.npz").exists()
     assert not list((built_repo / "results/work_precision").glob("N*/s*.npz"))
