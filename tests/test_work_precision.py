@@ -253,10 +253,69 @@ def test_findings_on_a_synthetic_table():
     exact_eoc = next(e for e in found["eoc"] if e["tol_label"] == "exact")
     np.testing.assert_allclose(exact_eoc["eoc"], [2.0, 2.0])
     assert exact_eoc["max_dev_paper"] == pytest.approx(0.1)
-    assert found["cheapest"][40] == {
-        "exact": {"tol_label": "exact", "time_s": 0.04},
-        "qp": {"tol_label": "1e-06", "time_s": 0.08},
+    assert found["cheapest"][40] == {  # no reference units in this table: ranked by seconds
+        "exact": {"tol_label": "exact", "time_s": 0.04, "rank": 0.04},
+        "qp": {"tol_label": "1e-06", "time_s": 0.08, "rank": 0.08},
     }
+    assert found["protocol"] == {"key": "time_s"}
+
+
+def _race_row(N: int, config: str, start: str, tol_label: str, time_s: float, time_ref: float, **kw) -> dict:
+    disc = 1e-3 / N
+    return {
+        "N": N,
+        "config": config,
+        "label": config,
+        "start": start,
+        "tol_label": tol_label,
+        "status": "ok",
+        "time_s": time_s,
+        "time_ref": time_ref,
+        "total_L4": disc,
+        "disc_L4": disc,
+        "alg_L4": 0.0,
+        "load1": 1.0,
+        "job_started": 0.0,
+        "job_wall_s": 1.0,
+        "build_s": 0.1,
+        "n_dofs": (N + 1) ** 2,
+        "time_runs": 3,
+        "spread": 0.01,
+        "rejected": 0,
+        "loaded": False,
+        "cpu_share": 1.0,
+        "reason": "",
+        "converged_reason": "",
+        "peer_info": "",
+        "solver": kw.get("solver", "active_set" if tol_label == "exact" else "petsc_tao"),
+    }
+
+
+def test_fair_race_same_warm_start_and_cold_against_cold():
+    """Ours from the cascade against the peers from the cascade start, ours cold against the
+    peers from u = 0; ranked and divided in reference units (the seconds would rank otherwise)."""
+    rows = []
+    for N in (101, 201):
+        rows += [
+            _race_row(N, "ours", "cascade", "exact", 1.0, 2.0),
+            _race_row(N, "ours_cold", "cold", "exact", 4.0, 8.0),
+            _race_row(N, "tron", "cold", "1e-08", 3.0, 12.0),
+            _race_row(N, "tron_ws", "cascade", "1e-08", 2.0, 3.0),
+            _race_row(N, "rsls_ws", "cascade", "1e-08", 1.5, 5.0),  # fewer seconds, more reference units
+        ]
+    found = wpf.findings(pd.DataFrame(rows), ["L4"])
+    warm, cold = found["fair"]["same_warm_start"], found["fair"]["cold_against_cold"]
+    assert [(r["N"], r["ours"], r["other"], r["ratio"]) for r in warm] == [
+        (101, "ours", "tron_ws", 1.5),
+        (201, "ours", "tron_ws", 1.5),
+    ]
+    assert [(r["other"], r["ratio"], r["other_s"]) for r in cold] == [("tron", 1.5, 3.0)] * 2
+    assert found["protocol"]["key"] == "time_ref" and found["protocol"]["repeats_median"] == 3
+    from signorini.studies.work_precision.report import work_precision_md
+
+    md = work_precision_md(pd.DataFrame(rows), found)
+    assert "## Same warm start, and cold against cold" in md and "**Timing protocol**" in md
+    assert "same warm start: ours" in md and "cold against cold: ours_cold" in md
 
 
 # --- the study end to end -------------------------------------------------------------------

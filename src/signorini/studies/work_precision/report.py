@@ -155,7 +155,7 @@ def _brief(df, found: Mapping, labels: Mapping[str, str]) -> list[str]:
         )
         lines.append(f"- **Published L⁴ cells (Table 1).** Closest run per mesh: {runs}.")
     exact = found.get("exact", {})
-    if "slope_L4" in exact:
+    if "slope_L4" in exact and "slope_W14" in exact:
         lines.append(COST.format(**exact))
     return lines
 
