@@ -348,3 +348,36 @@ def test_small_study_end_to_end(built_repo):
     noop = snakemake(built_repo, "-n", "work_precision")
     assert "Nothing to be done" in noop.stdout + noop.stderr
     assert math.isfinite(df["time_s"].min())
+
+
+def test_figure_draws_the_fastest_configuration_per_family_with_the_legend_below():
+    """Exact solvers plus one configuration per solver family (the fastest to Table 1's digits on
+    the finest mesh, in reference units), at most eight, Okabe–Ito colours, legends below the axes."""
+    from signorini.studies.work_precision import figures as wpfig
+
+    rows = []
+    for N in (101, 201):
+        rows += [
+            _race_row(N, "ours", "cascade", "exact", 1.0, 2.0),
+            _race_row(N, "ours_cold", "cold", "exact", 4.0, 8.0),
+            _race_row(N, "ours_superlu", "cascade", "exact", 2.0, 4.0),
+        ]
+        for k in range(4):  # four TAO methods: the one with the fewest reference units is drawn
+            rows.append(_race_row(N, f"tao{k}", "cold", "1e-08", 1.0 + k, 12.0 - k))
+        for k in range(5):  # five QP solvers, one family each
+            rows.append(_race_row(N, f"qp{k}", "cold", "1e-08", 1.0, 20.0, solver=f"QP{k}"))
+    df = pd.DataFrame(rows)
+    df["W14"] = 0.0
+    for kind in ("alg", "total", "disc"):
+        df[f"{kind}_W14"] = df[f"{kind}_L4"]
+    df["alg_L4"] = df["alg_W14"] = 1e-9
+    series = wpfig.figure_series(df, ["L4"])
+    assert len(series) == wpfig.MAX_SERIES == 8
+    assert series[:2] == ["ours", "ours_cold"] and "ours_superlu" not in series  # beyond 8: one exact per start
+    assert "tao3" in series and not {"tao0", "tao1", "tao2"} & set(series)
+    fig = wpfig.work_precision_figure(df, [101, 201])
+    colours = {line.get_color() for ax in fig.axes for line in ax.get_lines() if line.get_marker() not in ("", "None")}
+    assert colours <= set(wpfig.OKABE_ITO)
+    fig.canvas.draw()
+    lowest = min(ax.get_window_extent().y0 for ax in fig.axes)
+    assert all(leg.get_window_extent().y1 < lowest for leg in fig.legends)  # no legend over a panel

@@ -285,6 +285,12 @@ def _peers(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> dict[str, 
     }
 
 
+def fastest_to_digits(df: pd.DataFrame, N: int, table1_norms: Sequence[str]) -> dict[str, dict]:
+    """Per configuration, its fastest run at ``N`` that keeps Table 1's digits (the report's
+    "fastest route to Table 1's digits")."""
+    return _cheapest(df, [N], table1_norms)[N]
+
+
 def _fastest_other(cheapest: Mapping, configs: Sequence[str]) -> tuple[str, dict] | None:
     runs = [(c, v) for c, v in cheapest.items() if c in configs]
     return min(runs, key=lambda kv: kv[1]["rank"]) if runs else None
