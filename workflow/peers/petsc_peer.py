@@ -29,7 +29,8 @@ the initial one) with ``tao_gatol = tao_grtol = 0``, and the relative tolerance 
 Krylov solver (``ksp_rtol``; inexact Newton steps).  Timing: ``setup_s`` is the creation of the
 matrix, vectors and solver with ``setFromOptions`` and ``setUp``; ``solve_s`` (wall) and
 ``solve_cpu_s`` (this process's CPU time) the ``solve`` call from ``u = 0`` or from the initial
-guess.  A first solve under ``repeat_below_s`` is repeated (fresh objects each time).
+guess (whose relative stopping tests become absolute ones against the cold start's residual
+``‖b‖``, ``tolerance_options``).  A first solve under ``repeat_below_s`` is repeated (fresh objects each time).
 """
 
 from __future__ import annotations
@@ -211,14 +212,28 @@ def make_tao(PETSc, A, b, lb, ub):
     return tao
 
 
-def tolerance_options(kind: str, tol: float | None) -> dict:
-    """The options that set every stopping tolerance of the method to ``tol``."""
+def tolerance_options(kind: str, tol: float | None, cold_norm: float | None = None) -> dict:
+    """The options that set every stopping tolerance of the method to ``tol``.  From an initial
+    guess (``cold_norm``: the residual norm of the cold start u = 0, ``‖b‖``) the relative
+    residual and gradient tests become absolute ones, ``tol · cold_norm``: relative to the
+    guess's own, smaller residual they would demand more from a better start."""
     if tol is None:
         return {}
     if kind == "snes":
+        if cold_norm is not None:
+            return {"snes_rtol": 0.0, "snes_atol": tol * cold_norm, "snes_stol": tol, "ksp_rtol": tol}
         return {"snes_rtol": tol, "snes_stol": tol, "ksp_rtol": tol}
     # the inner Krylov solver: no prefix for TRON, GPCG and BQPIP, tao_bnk_ for BNLS/BNTR/BNTL
-    return {"tao_gttol": tol, "tao_gatol": 0.0, "tao_grtol": 0.0, "ksp_rtol": tol, "tao_bnk_ksp_rtol": tol}
+    inner = {"ksp_rtol": tol, "tao_bnk_ksp_rtol": tol}
+    if cold_norm is not None:
+        return {"tao_gttol": 0.0, "tao_gatol": tol * cold_norm, "tao_grtol": 0.0, **inner}
+    return {"tao_gttol": tol, "tao_gatol": 0.0, "tao_grtol": 0.0, **inner}
+
+
+def cold_residual_norm(system: str) -> float:
+    """‖F(0)‖ = ‖b‖: the residual (and gradient) norm of the cold start."""
+    with np.load(system, allow_pickle=False) as d:
+        return float(np.linalg.norm(d["b"]))
 
 
 def _effective(PETSc, kind: str, solver) -> dict:
@@ -290,7 +305,8 @@ def solve_once(PETSc, system: str, kind: str, start: str | None = None) -> dict:
 def solve(system: str, request: dict, outdir: str) -> dict:
     """Run the request (see the module docstring), write solution.npz and result.json."""
     kind, tol, start = request["kind"], request.get("tol"), request.get("initial_guess")
-    options = {**request.get("options", {}), **tolerance_options(kind, tol)}
+    cold_norm = cold_residual_norm(system) if start else None
+    options = {**request.get("options", {}), **tolerance_options(kind, tol, cold_norm)}
     result: dict = {"kind": kind, "tol": tol, "options": options, "python": sys.executable, "start": start or "cold"}
     try:
         PETSc = import_petsc()

@@ -384,6 +384,39 @@ def _measure(inp: _Inputs, config: SolverConfig, tol: float | None, time_limit: 
     return record
 
 
+def _job_info(at, config, tolerances, time_limit, growth_exponent, inp: _Inputs, records: list, clock) -> dict:
+    """The measurement artifact: the records (with the job's wall time), the protocol, the job."""
+    started, t_job, load_start = clock
+    wall_s = time.perf_counter() - t_job
+    for r in records:
+        r["job_wall_s"], r["job_started"] = wall_s, started
+    info = {
+        "N": at.N,
+        "config": config.as_dict(),
+        "tolerances": [float(t) for t in tolerances],
+        "time_limit_s": time_limit,
+        "growth_exponent": float(growth_exponent),
+        "records": records,
+        **({"peer": inp.peer.probe} if inp.peer is not None else {}),
+        "timing": {
+            "protocol": inp.timer.protocol.as_dict(),
+            "max_load": inp.timer.max_load,
+            "cores": inp.timer.machine.cores,
+            "kernel": inp.kernel.description,
+            "waited_s": inp.timer.waited_s,
+            **({"start": inp.start_timing} if inp.start_timing else {}),
+        },
+        "job": {
+            "started": started,
+            "wall_s": wall_s,
+            "load1_start": load_start,
+            "load1_end": os.getloadavg()[0],
+            "note": "wall_s: perf_counter over the whole stage function (loading, warm-up, solves, norms)",
+        },
+    }
+    return info
+
+
 def measure_stage(
     at: SceneMesh,
     config: Mapping,
@@ -439,35 +472,15 @@ def measure_stage(
         record.update({f"disc_{n}": v for n, v in inp.disc_err.items()})
         records.append(record)
         log.info(
-            "N=%d %s %s: %s %s time %.3f s, L4 alg %.2e", at.N, config.name, record["tol_label"], record["status"],
-            record["reason"], record["time_s"], record.get("alg_L4", math.nan),
+            "N=%d %s %s: %s %s time %.3f s, L4 alg %.2e",
+            at.N,
+            config.name,
+            record["tol_label"],
+            record["status"],
+            record["reason"],
+            record["time_s"],
+            record.get("alg_L4", math.nan),
         )
-    wall_s = time.perf_counter() - t_job
-    for r in records:
-        r["job_wall_s"], r["job_started"] = wall_s, started
-    info = {
-        "N": at.N,
-        "config": config.as_dict(),
-        "tolerances": [float(t) for t in tolerances],
-        "time_limit_s": time_limit,
-        "growth_exponent": float(growth_exponent),
-        "records": records,
-        **({"peer": inp.peer.probe} if inp.peer is not None else {}),
-        "timing": {
-            "protocol": inp.timer.protocol.as_dict(),
-            "max_load": inp.timer.max_load,
-            "cores": inp.timer.machine.cores,
-            "kernel": inp.kernel.description,
-            "waited_s": inp.timer.waited_s,
-            **({"start": inp.start_timing} if inp.start_timing else {}),
-        },
-        "job": {
-            "started": started,
-            "wall_s": wall_s,
-            "load1_start": load_start,
-            "load1_end": os.getloadavg()[0],
-            "note": "wall_s: perf_counter over the whole stage function (loading, warm-up, solves, norms)",
-        },
-    }
+    info = _job_info(at, config, tolerances, time_limit, growth_exponent, inp, records, (started, t_job, load_start))
     save_json(out_json, info)
     return info

@@ -167,7 +167,9 @@ PEERS_INTRO = (
     "interpolated coarse solution, whose cost is added as it is part of our cascade's time; the set-up (matrix, "
     "vectors, solver, `setFromOptions`, `setUp`) is the `setup_s` column of the CSV. Each answer passes our KKT "
     "certificate like every other; `failed` carries PETSc's converged reason. Tolerance: every stopping tolerance "
-    "of the method (SNES `rtol`, `stol`; TAO `gttol`; the inner Krylov `rtol`) set to it."
+    "of the method (SNES `rtol`, `stol`; TAO `gttol`; the inner Krylov `rtol`) set to it; from the cascade start the "
+    "relative residual and gradient tests become absolute ones, the tolerance times the cold start's residual ‖b‖ "
+    "(relative to the start's own, smaller residual they would demand more from a better start)."
 )
 FAIR = {
     "same_warm_start": "same warm start (ours from the cascade; the others from the cascade's coarse solution)",

@@ -98,13 +98,13 @@ class Protocol:
         return asdict(self)
 
 
-KERNEL_MIN_UNKNOWNS = 200_000  # a small system's kernel is repeated up to this many unknowns
+KERNEL_MIN_UNKNOWNS = 20_000  # a small system's kernel is repeated up to this many unknowns
 
 
 class ReferenceKernel:
     """A fixed amount of sparse work on the matrix ``A`` of the measured problem: one numerical
     Cholesky factorisation (the project's ``Factorizer``: CHOLMOD, else SuperLU; symbolic
-    analysis done once here) and ``matvecs`` CSR products, repeated ``ceil(200 000 / n)`` times
+    analysis done once here) and ``matvecs`` CSR products, repeated ``ceil(20 000 / n)`` times
     for ``n`` unknowns (so that a small mesh's kernel lasts tens of milliseconds, well above the
     clocks' resolution).  ``run()`` returns (wall, CPU) seconds."""
 
