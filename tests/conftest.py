@@ -100,8 +100,16 @@ TEST_SCENES = {
             "tolerances": [1e-2, 1e-8],
             "time_limit_s": 30,
             "figure_N": [11, 21],
+            # the timing protocol without waiting for a quiet machine (the test machine is shared)
+            "timing": {"wait_s": 0, "retries": 0, "min_repeats": 1, "budget_s": 1},
+            "same_warm_start": True,
             "configs": {
                 "active_set": {"solver": "active_set", "label": "active set"},
+                "active_set_cold": {
+                    "solver": "active_set",
+                    "label": "active set (cold)",
+                    "options": {"warm_start": None},
+                },
                 # a PETSc peer: certified rows with petsc4py under /usr/bin/python3, skipped rows without
                 "petsc_tron": {
                     "solver": "petsc_tao",

@@ -20,11 +20,12 @@ import pytest
 import yaml
 from helpers import PROBLEM, ROOT, TEST_PEER_PYTHON, clone_built, planned, snakemake
 
+from signorini.fem.discrete import DiscreteProblem
 from signorini.pipeline.paths import PEER_DRIVER
 from signorini.studies.scene.discretise import discretise_stage
 from signorini.studies.scene.norm import norm_stage
 from signorini.studies.scene.solve import solve_stage
-from signorini.studies.scene.store import SceneMesh
+from signorini.studies.scene.store import SceneMesh, load_system
 from signorini.studies.work_precision import measure as wp
 from signorini.studies.work_precision import peers
 from signorini.studies.work_precision.study import SolverConfig, study_configs
@@ -32,6 +33,7 @@ from signorini.studies.work_precision.study import SolverConfig, study_configs
 DRIVER = ROOT / PEER_DRIVER
 NORMS = ["L4", "W14", "Linf"]
 REQUIRED = os.environ.get("SIGNORINI_REQUIRE_PEERS") == "1"
+FAST = {"wait_s": 0.0, "retries": 0, "min_repeats": 1, "budget_s": 1.0}  # no waiting for a quiet machine
 
 
 def _driver():
@@ -55,7 +57,8 @@ def petsc_probe() -> dict:
 def shipped_peers() -> dict[str, SolverConfig]:
     """The peer configurations of the shipped work-precision study."""
     config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
-    return {k: c for k, c in study_configs(config["scenes"]["work_precision"]["study"]).items() if c.peer}
+    configs = study_configs(config["scenes"]["work_precision"]["study"])
+    return {k: c for k, c in configs.items() if c.peer and c.initial == "cold"}  # the _ws variants: same methods
 
 
 def test_peer_configurations_are_recognised():
@@ -73,6 +76,15 @@ def test_driver_reads_inner_solvers_and_tolerances():
     assert driver.tolerance_options("snes", None) == {}
     assert driver.tolerance_options("snes", 1e-6) == {"snes_rtol": 1e-6, "snes_stol": 1e-6, "ksp_rtol": 1e-6}
     assert driver.tolerance_options("tao", 1e-6)["tao_gttol"] == 1e-6
+    # from an initial guess: absolute tests against the cold start's residual ‖b‖ = 2
+    assert driver.tolerance_options("snes", 1e-6, 2.0) == {
+        "snes_rtol": 0.0,
+        "snes_atol": 2e-6,
+        "snes_stol": 1e-6,
+        "ksp_rtol": 1e-6,
+    }
+    warm = driver.tolerance_options("tao", 1e-6, 2.0)
+    assert (warm["tao_gatol"], warm["tao_gttol"], warm["tao_grtol"]) == (2e-6, 0.0, 0.0)
 
 
 def _answer(u_status: str = "done", converged: bool = True, reason: str = "CONVERGED_GTTOL") -> dict:
@@ -94,17 +106,17 @@ def test_peer_answers_get_the_study_statuses(cache):
     → failed with its reason (answer kept); driver errors → failed; missing inner solver → skipped."""
     disc, exact = cache.discrete({}, 11), cache.solution({}, 11)
     config = SolverConfig("p", "petsc_tao", "p", {"tao_type": "tron"})
-    ok = peers._outcome(config, disc, 1e-10, _answer(), exact.u)
+    ok = peers.outcome(config, disc, 1e-10, _answer(), exact.u)
     assert ok.status == "ok" and ok.result.certificate.worst <= 1e-10 and ok.times == [0.01, 0.012]
     assert ok.extra["peer_info"] == "PETSc 3.18.5: tron ksp=stcg pc=cholesky/cholmod"
     assert ok.extra["setup_s"] == 0.002 and ok.extra["converged_reason"] == "CONVERGED_GTTOL"
-    bad = peers._outcome(config, disc, 1e-10, _answer(), exact.u * 1.01)
+    bad = peers.outcome(config, disc, 1e-10, _answer(), exact.u * 1.01)
     assert bad.status == "inaccurate" and bad.reason.startswith("KKT residual")
-    diverged = peers._outcome(config, disc, None, _answer(converged=False, reason="DIVERGED_MAXITS"), exact.u)
+    diverged = peers.outcome(config, disc, None, _answer(converged=False, reason="DIVERGED_MAXITS"), exact.u)
     assert diverged.status == "failed" and diverged.reason == "PETSc DIVERGED_MAXITS" and diverged.result is not None
-    error = peers._outcome(config, disc, None, {"status": "error", "reason": "PETSc error 60: sizes"}, None)
+    error = peers.outcome(config, disc, None, {"status": "error", "reason": "PETSc error 60: sizes"}, None)
     assert (error.status, error.reason, error.result) == ("failed", "PETSc error 60: sizes", None)
-    missing = peers._outcome(config, disc, None, {"status": "unavailable", "reason": "no mumps"}, None)
+    missing = peers.outcome(config, disc, None, {"status": "unavailable", "reason": "no mumps"}, None)
     assert (missing.status, missing.reason) == ("skipped", "no mumps")
 
 
@@ -173,7 +185,7 @@ def test_without_petsc4py_the_peers_are_skipped(tmp_path, kind):
     inputs = _system(tmp_path, 11)
     spec = SolverConfig("p", "petsc_snes", "p", {"snes_type": "vinewtonrsls"}).as_dict()
     at = SceneMesh(PROBLEM, 11, "sw_ne")
-    info = wp.measure_stage(at, spec, [1e-6], 30.0, inputs, tmp_path / "out.json", peer_python=python)
+    info = wp.measure_stage(at, spec, [1e-6], 30.0, inputs, tmp_path / "out.json", peer_python=python, timing=FAST)
     records = info["records"]
     assert [r["status"] for r in records] == ["skipped", "skipped"]
     assert all(INTERPRETERS[kind] in r["reason"] for r in records) and not info["peer"]["petsc4py"]
@@ -209,7 +221,8 @@ def test_peer_smoke(tmp_path, petsc_probe, N):
     got = {}
     for name, config in configs.items():
         out = tmp_path / f"{name}.json"
-        info = wp.measure_stage(at, config.as_dict(), [1e-10], 120.0, inputs, out, peer_python=TEST_PEER_PYTHON)
+        spec = config.as_dict()
+        info = wp.measure_stage(at, spec, [1e-10], 120.0, inputs, out, peer_python=TEST_PEER_PYTHON, timing=FAST)
         default, tight = info["records"]
         assert default["status"] in ("ok", "inaccurate", "failed"), (name, default)
         got[name] = tight["status"]
@@ -229,12 +242,14 @@ def test_peers_in_the_small_study(built_repo):
     df = pd.read_csv(built_repo / "paper_figures/work_precision.csv")
     rows = df[df["config"] == "petsc_tron"]
     assert len(rows) == 2 * 3  # N = 11, 21: default and two tolerances
+    warm = df[df["config"] == "petsc_tron_ws"]  # below the cascade's first coarse level: no start to give
+    assert len(warm) == 2 * 3 and set(warm["status"]) == {"skipped"} and set(warm["start"]) == {"cascade"}
     found = peers.probe(TEST_PEER_PYTHON, DRIVER)
     if found.get("petsc4py"):
         tight = rows[rows["tol_label"] == "1e-08"]
         assert set(tight["status"]) == {"ok"} and (tight["kkt_worst"] <= 1e-8).all()
         assert tight["converged_reason"].str.startswith("CONVERGED").all() and (tight["setup_s"] > 0).all()
-        assert "## PETSc peers" in (built_repo / "paper_figures/work_precision.md").read_text()
+        assert "## PETSc peers" in (built_repo / "paper_figures/work_precision.md").read_text(encoding="utf-8")
     else:
         assert set(rows["status"]) == {"skipped"}
         # N = 11 gives the probe's reason; N = 21 the same, "at N=11" (skipped on the previous mesh)
@@ -247,4 +262,59 @@ def test_a_driver_edit_reruns_only_the_peer_jobs(built_repo, tmp_path):
     driver.write_text(driver.read_text() + "\n# edited\n")
     jobs = planned(snakemake(repo, "-n", "work_precision"))
     measured = {(wc["N"], wc["solver"]) for rule, wc in jobs if rule == "work_precision_measure"}
-    assert measured == {("11", "petsc_tron"), ("21", "petsc_tron")}
+    assert measured == {(N, name) for N in ("11", "21") for name in ("petsc_tron", "petsc_tron_ws")}
+
+
+def test_same_warm_start_variants():
+    """``same_warm_start``: every peer gets a ``_ws`` variant started from the cascade; the
+    others do not (cvxpy's QP interfaces take no initial guess); below the cascade's first
+    coarse level the variant's runs are skipped with the reason."""
+    study = {
+        "configs": {
+            "as": {"solver": "active_set"},
+            "tron": {"solver": "petsc_tao", "label": "TRON", "options": {"tao_type": "tron"}},
+        },
+        "qp_solvers": ["OSQP"],
+        "same_warm_start": True,
+    }
+    configs = study_configs(study)
+    assert list(configs) == ["as", "tron", "osqp", "tron_ws"]
+    assert configs["tron_ws"].initial == "cascade" and configs["tron_ws"].label == "TRON (cascade start)"
+    assert configs["tron"].initial == "cold" and configs["as"].initial == "cascade"
+    assert SolverConfig(**configs["tron_ws"].as_dict()) == configs["tron_ws"]  # the rule's params round trip
+
+
+def test_a_warm_started_peer_below_the_cascade_is_skipped(tmp_path):
+    inputs = _system(tmp_path, 11)
+    spec = SolverConfig("p_ws", "petsc_tao", "p", {"tao_type": "tron"}, "cascade").as_dict()
+    at = SceneMesh(PROBLEM, 11, "sw_ne")
+    out = tmp_path / "out.json"
+    info = wp.measure_stage(at, spec, [1e-6], 30.0, inputs, out, peer_python=sys.executable, timing=FAST)
+    assert {r["status"] for r in info["records"]} == {"skipped"}
+    assert all(r["reason"].startswith("no cascade start below N = 96") for r in info["records"])
+    assert {r["start"] for r in info["records"]} == {"cascade"}
+
+
+@pytest.mark.peers
+@pytest.mark.parametrize("name", ["petsc_rsls_cholmod", "petsc_tron_boomeramg"])
+def test_peer_from_an_initial_guess(tmp_path, petsc_probe, name):
+    """The driver starts from the initial guess it is given: from the exact solution a SNES VI
+    Newton method and TAO TRON stop at once (≤ 1 iteration; the relative tests made absolute
+    against the cold start's residual), from u = 0 they need more; the
+    answer is certified like every other.  Timed under the protocol (CPU time of the solve)."""
+    from signorini.studies.work_precision.timing import Protocol, ReferenceKernel, Timer
+
+    inputs = _system(tmp_path, 41)
+    config = shipped_peers()[name]
+    exact = np.load(inputs["exact"])["u"]
+    route = peers.PeerRoute(TEST_PEER_PYTHON, str(DRIVER), str(inputs["system"]), petsc_probe)
+    at = SceneMesh(PROBLEM, 41, "sw_ne")
+    A, b, boundary = load_system(inputs["system"], 41)
+    disc = DiscreteProblem(at.problem, 41, "sw_ne", at.mesh(), A, b, boundary)
+    timer, kernel = Timer(Protocol.from_mapping(FAST)), ReferenceKernel(A)
+    warm = peers.run_peer(config, route, disc, 1e-10, 120.0, timer, kernel, initial_guess=exact)
+    cold = peers.run_peer(config, route, disc, 1e-10, 120.0, timer, kernel)
+    assert warm.status == cold.status == "ok", (warm.reason, cold.reason)
+    assert warm.result.iterations <= 1 < cold.result.iterations
+    assert warm.extra["peer"]["start"] != "cold" and cold.extra["peer"]["start"] == "cold"
+    assert warm.extra["timing"]["time_runs"] >= 1 and warm.extra["timing"]["cpu_share"] > 0

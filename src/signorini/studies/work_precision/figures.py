@@ -20,13 +20,55 @@ def _marker(label: str) -> str:
     return TOL_MARKERS.get(label, "h")
 
 
-def _config_colors(df) -> dict:
-    """One colour per configuration: tab10 for up to 10, tab20 for up to 20, then tab20 again."""
-    import matplotlib
+# Okabe & Ito's colour-blind-safe palette, in an order whose neighbours differ most; its yellow
+# (#F0E442), too weak on white for hollow markers, replaced by a mid grey
+OKABE_ITO = ["#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#000000", "#8C8C8C"]
+MAX_SERIES = len(OKABE_ITO)
+FAMILIES = {"petsc_snes": "PETSc SNES VI", "petsc_tao": "PETSc TAO"}
 
-    configs = list(dict.fromkeys(df["config"]))
-    cmap = matplotlib.colormaps["tab10" if len(configs) <= 10 else "tab20"]
-    return {c: cmap(k % cmap.N) for k, c in enumerate(configs)}
+
+def family(solver: str) -> str:
+    """A configuration's solver family: PETSc SNES, PETSc TAO or the QP solver's name."""
+    return FAMILIES.get(solver, solver)
+
+
+def figure_series(df, table1_norms: Sequence[str] | None = None) -> list[str]:
+    """The configurations drawn: every exact one, and per other solver family the fastest
+    configuration (reference units where measured) to Table 1's digits on the finest mesh (none
+    keeps them: the family's fastest run of status ok there; its first configuration otherwise).
+    Beyond ``MAX_SERIES`` (the palette), only the first exact configuration of each start
+    (cascade, cold) stays (a backend variant goes; its runs are in the CSV and the report)."""
+    from signorini.paper import TABLE1_NORMS
+    from signorini.studies.work_precision.findings import fastest_to_digits, rank_key
+
+    exact = list(dict.fromkeys(df.loc[df["tol_label"] == "exact", "config"]))
+    finest = int(df["N"].max())
+    norms = [n for n in (table1_norms or TABLE1_NORMS) if f"total_{n}" in df.columns]
+    keeps = fastest_to_digits(df, finest, norms)
+    last = df[(df["N"] == finest) & (df["status"] == "ok")]
+    key = rank_key(df)
+    chosen = list(exact)
+    others = df[~df["config"].isin(exact)]
+    for fam in dict.fromkeys(family(str(s)) for s in others["solver"]):
+        members = list(dict.fromkeys(others.loc[others["solver"].astype(str).map(family) == fam, "config"]))
+        candidates = {c: v["rank"] for c, v in keeps.items() if c in members}
+        if not candidates:
+            ok = last[last["config"].isin(members)]
+            candidates = ok.groupby("config")[key].min().to_dict() if not ok.empty else {members[0]: 0.0}
+        chosen.append(min(candidates, key=candidates.get))
+    if len(chosen) > MAX_SERIES:
+        from signorini.studies.work_precision.findings import starts
+
+        start = dict(zip(df["config"], starts(df), strict=True))
+        first = {start[c]: c for c in reversed(exact)}
+        chosen = [c for c in chosen if c not in exact or first.get(start[c]) == c]
+    return chosen
+
+
+def _config_colors(df, configs: Sequence[str] | None = None) -> dict:
+    """One Okabe–Ito colour per drawn configuration (cycled beyond eight)."""
+    configs = list(configs) if configs is not None else list(dict.fromkeys(df["config"]))
+    return {c: OKABE_ITO[k % len(OKABE_ITO)] for k, c in enumerate(configs)}
 
 
 def _line_style(sub, config: str) -> str:
@@ -73,10 +115,11 @@ def _run_points(ax, sub, config: str, order, color, norm: str, floor: float) -> 
         ax.plot(line_x, line_y, color=color, linewidth=0.9, alpha=0.7, zorder=2, linestyle=_line_style(sub, config))
 
 
-def _legend_handles(df, configs, colors, order) -> list:
+def _legend_handles(df, configs, colors, order) -> tuple[list, list]:
+    """(one handle per drawn configuration, the marker and line keys)."""
     from matplotlib.lines import Line2D
 
-    handles = [
+    solvers = [
         Line2D(
             [],
             [],
@@ -86,55 +129,62 @@ def _legend_handles(df, configs, colors, order) -> list:
             label=str(df.loc[df["config"] == c, "label"].iloc[0]),
         )
         for c in configs
+        if (df["config"] == c).any()
     ]
     names = {"exact": "exact (active set)", "default": "solver default"}
-    handles += [
+    keys = [
         Line2D([], [], color="0.3", marker=_marker(lab), linestyle="none", label=names.get(lab, f"tol {lab}"))
         for lab in dict.fromkeys(lab for _, lab in order)
     ]
-    return handles + [
+    keys += [
         Line2D([], [], color="0.3", marker="o", markerfacecolor="white", linestyle="none", label="inaccurate"),
         Line2D([], [], color="0.3", marker="x", linestyle="none", label="failed (at top)"),
-        Line2D([], [], color="k", linewidth=1.2, label="discretisation error"),
-        Line2D([], [], color="k", linewidth=0.8, linestyle=":", label=r"$10^{-4}\times$ discr. error"),
-        Line2D([], [], color="none", label="error 0: bottom edge"),
+        Line2D([], [], color="0.2", linewidth=1.2, label="discretisation error"),
+        Line2D([], [], color="0.2", linewidth=0.8, linestyle=":", label=r"$10^{-4}\times$ discr. error"),
     ]
+    return solvers, keys
 
 
 @styled
-def work_precision_figure(df, figure_N: Sequence[int] = (), fig=None):
+def work_precision_figure(df, figure_N: Sequence[int] = (), fig=None, configs: Sequence[str] | None = None):
     """Algebraic error ``‖u_h^solver − u_h^exact‖`` (rows: ``L⁴``, ``W^{1,4}``) against solve time,
     log-log, one panel column per ``N`` of ``figure_N`` (default: coarsest, middle, finest).
 
-    One colour and line per solver configuration (its tolerances loose to tight; dashed: the
-    PETSc peers), one marker
-    per tolerance (star: the solver's default); hollow markers: inaccurate (KKT residual above
-    the tolerance); ×: failed, drawn at the top at the time of failure.  The discretisation
-    error of the mesh is the solid horizontal line, 10⁻⁴ of it (Table 1's fifth digit) the
-    dotted one; an algebraic error of exactly 0 (the pipeline's own solve) sits on the bottom edge.
-    ``df``: the rows of ``work_precision.csv``.  Returns the figure.
+    Drawn (``figure_series``, or ``configs``): every exact solver and the fastest configuration
+    of each other solver family to Table 1's digits on the finest mesh, each with its whole
+    tolerance sweep (a line through its tolerances loose to tight; dashed: PETSc), in the
+    Okabe–Ito palette; one marker per tolerance (star: the solver's default); hollow markers:
+    inaccurate (KKT residual above the tolerance); ×: failed, drawn at the top at the time of
+    failure.  The discretisation error of the mesh is the solid horizontal line, 10⁻⁴ of it
+    (Table 1's fifth digit) the dotted one; an algebraic error of exactly 0 (the pipeline's own
+    solve) sits on the bottom edge.  The legends sit below the panels.  Every configuration's
+    runs are in ``work_precision.csv`` and ``work_precision.md``.  ``df``: the rows of
+    ``work_precision.csv``.  Returns the figure.
     """
     from matplotlib.ticker import NullFormatter
 
     Ns = sorted(int(N) for N in df["N"].unique())
     cols = [int(N) for N in figure_N if int(N) in Ns] or sorted({Ns[0], Ns[len(Ns) // 2], Ns[-1]})
-    configs = list(dict.fromkeys(df["config"]))
-    ncol = 6 if len(configs) <= 10 else 4  # long labels of many configurations: fewer columns
-    legend_rows = -(-(len(configs) + 11) // ncol)  # configurations, tolerances and line keys
-    fig = fig if fig is not None else new_figure(figsize=(4.1 * len(cols), 6.4 + 0.22 * legend_rows))
-    colors = _config_colors(df)
-    order = tolerance_order(df)
+    configs = list(configs) if configs is not None else figure_series(df)
+    shown = df[df["config"].isin(configs)]
+    order = tolerance_order(shown)
+    ncol = 4 if len(cols) > 2 else 3
+    solver_rows = -(-len(configs) // ncol) + 1  # the configurations and the legend's title
+    key_rows = -(-(len(dict.fromkeys(lab for _, lab in order)) + 4) // 6)
+    height = 6.4 + 0.24 * (solver_rows + key_rows)
+    fig = fig if fig is not None else new_figure(figsize=(4.2 * len(cols), height))
+    colors = _config_colors(df, configs)
     axes = fig.subplots(len(FIGURE_NORMS), len(cols), squeeze=False, sharex="col")
     for i, norm in enumerate(FIGURE_NORMS):
-        alg_all = df[f"alg_{norm}"].to_numpy(dtype=float)
+        alg_all = shown[f"alg_{norm}"].to_numpy(dtype=float)
         positive = alg_all[np.isfinite(alg_all) & (alg_all > 0)]
         disc_min = float(df[f"disc_{norm}"].min())
         floor = min(float(positive.min()) if positive.size else disc_min, 1e-4 * disc_min) / 10.0
         for j, N in enumerate(cols):
-            ax, sub = axes[i, j], df[df["N"] == N]
-            disc = float(sub[f"disc_{norm}"].iloc[0])
-            ax.axhline(disc, color="k", linewidth=1.2, zorder=1)
-            ax.axhline(1e-4 * disc, color="k", linewidth=0.8, linestyle=":", zorder=1)
+            ax, sub = axes[i, j], shown[shown["N"] == N]
+            disc = float(df.loc[df["N"] == N, f"disc_{norm}"].iloc[0])
+            ax.axhline(disc, color="0.2", linewidth=1.2, zorder=1)
+            ax.axhline(1e-4 * disc, color="0.2", linewidth=0.8, linestyle=":", zorder=1)
             for config in configs:
                 _run_points(ax, sub, config, order, colors[config], norm, floor)
             ax.set_xscale("log")
@@ -145,15 +195,33 @@ def work_precision_figure(df, figure_N: Sequence[int] = (), fig=None):
             if i == 0:
                 ax.set_title(f"$h = 1/{N}$")
             if i == len(FIGURE_NORMS) - 1:
-                ax.set_xlabel("solve time [s]")
+                ax.set_xlabel(_time_label(df))
             if j == 0:
                 ax.set_ylabel(f"algebraic error in {label_tex(norm, domain=False)}")
+    solvers, keys = _legend_handles(shown, configs, colors, order)
+    row = 0.24 / fig.get_figheight()  # one legend row, as a fraction of the figure's height
+    title = "exact solvers and the fastest configuration of each solver family (every run: work_precision.csv)"
+    fig.legend(handles=keys, loc="lower center", bbox_to_anchor=(0.5, 0.0), ncol=6, fontsize=8, frameon=False)
     fig.legend(
-        handles=_legend_handles(df, configs, colors, order), loc="lower center", ncol=ncol, fontsize=8, frameon=False
+        handles=solvers,
+        loc="lower center",
+        bbox_to_anchor=(0.5, row * (key_rows + 0.3)),
+        ncol=ncol,
+        fontsize=8,
+        frameon=False,
+        title=title,
+        title_fontsize=8,
     )
+    bottom = row * (solver_rows + key_rows + 0.8)
     fig.suptitle(r"Work precision: $\|u_h^{\mathrm{solver}} - u_h^{\mathrm{exact}}\|$ against solve time")
-    fig.tight_layout(rect=(0, 0.03 * legend_rows, 1, 0.97))
+    fig.tight_layout(rect=(0, bottom, 1, 0.97))
     return fig
+
+
+def _time_label(df) -> str:
+    from signorini.studies.work_precision.findings import rank_key
+
+    return "solve time [CPU s]" if rank_key(df) == "time_ref" else "solve time [s]"
 
 
 def _exact_runs(df):
@@ -195,15 +263,15 @@ def cost_panel(df, ax=None):
     return ax
 
 
-def _peer_lines(df, ax) -> None:
-    """Each PETSc peer's time to Table 1's digits against the unknowns (dashed), with its exponent."""
+def _peer_lines(df, ax, colors: dict) -> None:
+    """The drawn PETSc peers' (``figure_series``) time to Table 1's digits against the unknowns
+    (dashed), with their exponents."""
     from signorini.paper import TABLE1_NORMS
     from signorini.studies.work_precision.findings import peer_comparison
 
-    colors = _config_colors(df)
     n_dofs = df.drop_duplicates("N").set_index("N")["n_dofs"]
     for config, v in (peer_comparison(df, TABLE1_NORMS).get("scaling") or {}).items():
-        if not v["N"]:
+        if not v["N"] or config not in colors:
             continue
         p = f" ($p$ = {v['exponent']:.2f})" if np.isfinite(v["exponent"]) else ""
         x = [float(n_dofs[N]) for N in v["N"]]
@@ -212,19 +280,27 @@ def _peer_lines(df, ax) -> None:
 
 @styled
 def time_panel(df, ax=None):
-    """Where the time goes: assembly and every exact solver configuration against the unknowns;
-    dashed: each PETSc peer's time to Table 1's digits (``findings.peer_comparison``)."""
-    ax = ax if ax is not None else new_figure(figsize=(5.5, 4.6)).subplots()
+    """Where the time goes: assembly and the exact solver configurations against the unknowns;
+    dashed: the drawn PETSc peers' time to Table 1's digits (``findings.peer_comparison``), in
+    the colours of ``work_precision_figure``; the legend below the axes."""
+    ax = ax if ax is not None else new_figure(figsize=(5.5, 6.0)).subplots()
     ex, exact = _exact_runs(df)
+    colors = _config_colors(df, figure_series(df))
     n = ex["n_dofs"].to_numpy(dtype=float)
     ax.loglog(n, ex["build_s"], marker="s", color="0.3", label="assembly (mesh, A, b)")
     for config in dict.fromkeys(exact["config"]):
         sub = exact[exact["config"] == config].sort_values("N")
-        ax.loglog(sub["n_dofs"], sub["time_s"], marker="o", label=f"solve: {sub['label'].iloc[0]}")
-    _peer_lines(df, ax)
+        ax.loglog(
+            sub["n_dofs"],
+            sub["time_s"],
+            marker="o",
+            color=colors.get(config, "0.6"),
+            label=f"solve: {sub['label'].iloc[0]}",
+        )
+    _peer_lines(df, ax, colors)
     ax.loglog(n, float(ex["build_s"].iloc[0]) * n / n[0], linestyle=":", color="0.6", label=r"$\propto$ unknowns")
     ax.set_xlabel("unknowns $(N+1)^2$")
-    ax.set_ylabel("wall time [s]")
+    ax.set_ylabel(_time_label(df).replace("solve time", "time"))
     ax.set_title("Where the time goes")
     ax.grid(True, which="major", linewidth=0.3, alpha=0.6)
     # below the axes: inside, the many lines of the peers leave no free corner
@@ -244,7 +320,7 @@ def cost_of_accuracy(df, fig=None):
     """``cost_panel`` (left) and ``time_panel`` (right) side by side.  ``df``: ``work_precision.csv``."""
     from matplotlib.ticker import NullFormatter
 
-    fig = fig if fig is not None else new_figure(figsize=(11.0, 4.6))
+    fig = fig if fig is not None else new_figure(figsize=(11.0, 5.6))
     ax, ax2 = fig.subplots(1, 2)
     cost_panel(df, ax)
     time_panel(df, ax2)

@@ -92,8 +92,30 @@ def _needed(cells: Sequence[Mapping]) -> dict[str, str | None]:
     return needed
 
 
+def rank_key(df: pd.DataFrame) -> str:
+    """The column that ranks run times: ``time_ref`` (reference units, the timing protocol's)
+    when the table has it, else ``time_s`` (tables measured before the protocol)."""
+    if "time_ref" in df.columns and np.isfinite(df["time_ref"].to_numpy(dtype=float)).any():
+        return "time_ref"
+    return "time_s"
+
+
+def starts(df: pd.DataFrame) -> pd.Series:
+    """Each row's start (``cascade`` or ``cold``); tables without the ``start`` column: the
+    exact solver's cold configurations by their label, every other run cold."""
+    import pandas as pd
+
+    if "start" in df.columns and df["start"].notna().all():
+        return df["start"].astype(str)
+    exact = df["tol_label"] == EXACT_LABEL
+    cold = df["label"].astype(str).str.contains("cold")
+    return pd.Series(np.where(exact & ~cold, "cascade", "cold"), index=df.index)
+
+
 def _cheapest(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> dict[int, dict[str, dict]]:
-    """Per N and config, the fastest run that leaves Table 1's row of that N unchanged."""
+    """Per N and config, the fastest run (by ``rank_key``) that leaves Table 1's row of that N
+    unchanged: its tolerance, seconds and reference units."""
+    key = rank_key(df)
     cheapest: dict[int, dict[str, dict]] = {}
     for N in Ns:
         cheapest[N] = {}
@@ -101,8 +123,12 @@ def _cheapest(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> dict[in
             rows = df[(df["config"] == config) & (df["N"] == N)]
             good = [r for _, r in rows.iterrows() if _unchanged(r, t1)]
             if good:
-                fastest = min(good, key=lambda r: float(r["time_s"]))
-                cheapest[N][config] = {"tol_label": str(fastest["tol_label"]), "time_s": float(fastest["time_s"])}
+                fastest = min(good, key=lambda r: float(r[key]))
+                cheapest[N][config] = {
+                    "tol_label": str(fastest["tol_label"]),
+                    "time_s": float(fastest["time_s"]),
+                    "rank": float(fastest[key]),
+                }
     return cheapest
 
 
@@ -224,7 +250,7 @@ def _peers(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> dict[str, 
     for N in Ns:
         ours = cheapest.get(N, {}).get(ours_config)
         runs = {c: v for c, v in cheapest.get(N, {}).items() if c in names}
-        best = min(runs.items(), key=lambda kv: kv[1]["time_s"]) if runs else None
+        best = min(runs.items(), key=lambda kv: kv[1]["rank"]) if runs else None
         ratio.append(
             {
                 "N": N,
@@ -232,7 +258,7 @@ def _peers(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> dict[str, 
                 "peer": best[0] if best else None,
                 "peer_tol": best[1]["tol_label"] if best else None,
                 "peer_s": best[1]["time_s"] if best else math.nan,
-                "ratio": best[1]["time_s"] / ours["time_s"] if best and ours else math.nan,
+                "ratio": best[1]["rank"] / ours["rank"] if best and ours else math.nan,
             }
         )
     scaling = {}
@@ -259,20 +285,101 @@ def _peers(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> dict[str, 
     }
 
 
+def fastest_to_digits(df: pd.DataFrame, N: int, table1_norms: Sequence[str]) -> dict[str, dict]:
+    """Per configuration, its fastest run at ``N`` that keeps Table 1's digits (the report's
+    "fastest route to Table 1's digits")."""
+    return _cheapest(df, [N], table1_norms)[N]
+
+
+def _fastest_other(cheapest: Mapping, configs: Sequence[str]) -> tuple[str, dict] | None:
+    runs = [(c, v) for c, v in cheapest.items() if c in configs]
+    return min(runs, key=lambda kv: kv[1]["rank"]) if runs else None
+
+
+def _fair_race(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> dict[str, list[dict]]:
+    """Per N, two comparisons of our active set with the fastest other solver to Table 1's
+    digits (status ok): ``same_warm_start`` — ours from the cascade against the solvers
+    started from the cascade's interpolated coarse solution (the start's cost included) — and
+    ``cold_against_cold`` — ours from the cold start against the others from u = 0.  Ratios
+    (other / ours) by ``rank_key``; empty without the runs of a side."""
+    start = starts(df)
+    exact = df["tol_label"] == EXACT_LABEL
+    cheapest = _cheapest(df[df["status"] == "ok"], Ns, t1)
+    out: dict[str, list[dict]] = {}
+    for key, kind in (("same_warm_start", "cascade"), ("cold_against_cold", "cold")):
+        ours = list(dict.fromkeys(df.loc[exact & (start == kind), "config"]))
+        others = list(dict.fromkeys(df.loc[~exact & (start == kind), "config"]))
+        if not ours or not others:
+            continue
+        rows = []
+        for N in Ns:
+            mine, best = cheapest.get(N, {}).get(ours[0]), _fastest_other(cheapest.get(N, {}), others)
+            rows.append(
+                {
+                    "N": N,
+                    "ours": ours[0],
+                    "ours_s": mine["time_s"] if mine else math.nan,
+                    "other": best[0] if best else None,
+                    "other_tol": best[1]["tol_label"] if best else None,
+                    "other_s": best[1]["time_s"] if best else math.nan,
+                    "ratio": best[1]["rank"] / mine["rank"] if best and mine else math.nan,
+                }
+            )
+        out[key] = rows
+    return out
+
+
 def peer_comparison(df: pd.DataFrame, table1_norms: Sequence[str]) -> dict[str, Any]:
     """``findings(...)["peers"]`` alone (for the figures)."""
     Ns = sorted(int(N) for N in df["N"].unique())
     return _peers(df, Ns, [n for n in table1_norms if f"total_{n}" in df.columns])
 
 
+def _protocol(df: pd.DataFrame) -> dict[str, Any]:
+    """What the timing protocol did (tables measured under it): repeats per run, spread, samples
+    rejected and redone, runs accepted under load after the last retry, CPU share, the time key."""
+    timed = df[df["status"] != "skipped"]
+    if "time_ref" not in df.columns or timed.empty:
+        return {"key": rank_key(df)}
+
+    def col(name: str) -> np.ndarray:
+        return pd_numeric(timed, name)
+
+    runs, spread, share = col("time_runs"), col("spread"), col("cpu_share")
+    return {
+        "key": rank_key(df),
+        "runs": int(np.isfinite(runs).sum()),
+        "repeats_median": float(np.nanmedian(runs)) if np.isfinite(runs).any() else math.nan,
+        "repeats_max": float(np.nanmax(runs)) if np.isfinite(runs).any() else math.nan,
+        "spread_median": float(np.nanmedian(spread)) if np.isfinite(spread).any() else math.nan,
+        "rejected": int(np.nansum(col("rejected"))),
+        "loaded": int(np.nansum(col("loaded"))),
+        "cpu_share_median": float(np.nanmedian(share)) if np.isfinite(share).any() else math.nan,
+    }
+
+
+def pd_numeric(df: pd.DataFrame, name: str) -> np.ndarray:
+    """A column as floats (booleans as 0/1, missing as NaN)."""
+    import pandas as pd
+
+    if name not in df.columns:
+        return np.full(len(df), math.nan)
+    col = df[name]
+    if col.dtype == object:
+        col = col.map({True: 1.0, False: 0.0, "True": 1.0, "False": 0.0})
+    return pd.to_numeric(col, errors="coerce").to_numpy(dtype=float)
+
+
 def _machine(df: pd.DataFrame) -> dict[str, Any]:
     """Load average at the measurements, wall-clock span of the jobs, their summed time, status counts."""
     load = df[df["status"] != "skipped"]["load1"].to_numpy(dtype=float)
+    load = load[np.isfinite(load)]
     ends = (df["job_started"] + df["job_wall_s"]).to_numpy(dtype=float)
     return {
         "load": {"min": float(np.min(load)), "median": float(np.median(load)), "max": float(np.max(load))}
         if load.size
         else {},
+        "protocol": _protocol(df),
         "span_s": float(np.nanmax(ends) - np.nanmin(df["job_started"])) if len(df) else math.nan,
         "job_time_s": float(df.drop_duplicates(["N", "config"])["job_wall_s"].sum()),
         "counts": df["status"].value_counts().to_dict(),
@@ -305,6 +412,10 @@ def findings(
     - ``peers``: our cascade against the PETSc peers (``_peers``): per N the fastest peer run
       that keeps Table 1's digits with status ``ok``, its time and its ratio to ours; per peer
       the time to those digits per N and the exponent ``p`` of ``time ∝ unknowns^p``.
+    - ``fair``: ``_fair_race``: per N our active set against the fastest other solver to Table
+      1's digits, from the same (cascade) warm start and cold against cold.
+    - ``protocol``: what the timing protocol did (``_protocol``); ratios and rankings use
+      ``rank_key`` (reference units when measured).
     - ``load``/``span_s``/``job_time_s``/``counts``: the load average at the measurements, the
       wall-clock span of the measurement jobs, their summed run time and the status counts.
     """
@@ -320,6 +431,7 @@ def findings(
         "needed": _needed(cells),
         "cheapest": cheapest,
         "peers": _peers(df, Ns, t1),
+        "fair": _fair_race(df, Ns, t1),
         "eoc": _l4_eocs(df, Ns, paper_rates, paper_l4),
         "paper_l4_eoc": paper_rates,
         "exact": _exact_cost(df, Ns),

@@ -2,12 +2,17 @@
 
 What is measured, per mesh ``N`` and per *solver configuration* (``study_configs``):
 
-- ``time_s``: wall time (``time.perf_counter``) of one call of the solver on the assembled
-  system, best of 3 when the first call takes under ``REPEAT_BELOW_S`` = 1 s.  For the
-  active-set solver the call is ``solve_discrete`` (a cascade warm start includes building
-  and solving the coarse levels); for cvxpy it is ``cvxpy_solve`` (cvxpy's canonicalisation
-  included; the QP solver's own time is ``solver_time_s``).  Assembly of the level-``N``
-  system is common to all configurations and timed once (``build_s``, the ``discretise`` stage).
+- ``time_s``: CPU time of one call of the solver on the assembled system (a PETSc peer: its
+  driver's CPU time around PETSc's ``solve``), the median of the repeats of the timing protocol
+  (``timing``): ``wall_s`` the wall time, ``time_ref`` the time in reference units (against
+  a sparse reference kernel timed before and after every call), ``cpu_share`` CPU over wall,
+  ``spread``, ``time_runs``, ``rejected``, ``loaded``, ``load1`` (1-minute load average).
+  For the active-set solver the call is ``solve_discrete`` (a cascade warm start includes
+  building and solving the coarse levels); for cvxpy it is ``cvxpy_solve`` (cvxpy's
+  canonicalisation included; the QP solver's own time is ``solver_time_s``); a peer started
+  from the cascade (``start`` = cascade) has the start's cost (``start_s``, computed once per
+  job) added.  Assembly of the level-``N`` system is common to all configurations and timed
+  once (``build_s``, the ``discretise`` stage).
 - ``iterations`` (Newton steps of the active-set method, iterations of the QP solver) and
   the relative KKT residuals of ``signorini.solvers.certificate`` (computed with the check
   disabled, so an inaccurate answer is recorded, not raised).
@@ -49,11 +54,10 @@ from signorini.fem.p1norms import p1_norms
 from signorini.pipeline.artifacts import load_json, save_json
 from signorini.studies.scene.store import SceneMesh, load_system, read_norm
 from signorini.studies.work_precision.study import EXACT_LABEL, GROWTH_EXPONENT, SolverConfig
+from signorini.studies.work_precision.timing import CallFailed, Protocol, ReferenceKernel, Timer
 
 log = logging.getLogger(__name__)
 
-REPEAT_BELOW_S = 1.0  # a solve faster than this is repeated, best of 3
-REPEATS = 3
 # cvxpy solver option that limits the wall time of one solve (seconds)
 TIME_LIMIT_OPTIONS = {
     "CLARABEL": "time_limit",
@@ -117,74 +121,101 @@ def classify_failure(err: BaseException, elapsed: float, time_limit_s: float | N
     return "failed", f"{type(err).__name__}: {message[:240]}"
 
 
+def solver_options(config: SolverConfig, tol: float | None, limit: float | None) -> tuple[dict, float]:
+    """The options of an in-process solver call (a QP solver's time limit added) and the KKT
+    residual its answer must reach (``tol``, the solver's default tolerance, the certificate's 1e-10)."""
+    from signorini.solvers.cvxpy_qp import TOLERANCE_OPTIONS
+
+    options = dict(config.options)
+    if config.exact:
+        return options, float(options.get("kkt_tol", 1e-10))
+    if limit is not None and config.solver in TIME_LIMIT_OPTIONS:
+        options.setdefault(TIME_LIMIT_OPTIONS[config.solver], float(limit))
+    default = TOLERANCE_OPTIONS.get(config.solver, ((), math.nan))[1]
+    return options, float(tol) if tol is not None else float(default)
+
+
+def _in_process_call(config: SolverConfig, disc, tol: float | None, options: Mapping):
+    """The call of an active-set or cvxpy configuration, for ``timing.Timer``: ``(SolveResult, None)``."""
+    from signorini.fem.solve import solve_discrete
+    from signorini.solvers import cvxpy_solve
+
+    options = dict(options)
+    if config.exact:
+        warm = options.pop("warm_start", "cascade")
+        return lambda: (solve_discrete(disc, config.solver, warm_start=warm, **options), None)
+    return lambda: (cvxpy_solve(disc.A, disc.b, disc.boundary, config.solver, tol=tol, check=False, **options), None)
+
+
+def timed_call(
+    config: SolverConfig,
+    disc,
+    tol: float | None,
+    time_limit_s: float | None = None,
+    peer=None,
+    initial_guess: np.ndarray | None = None,
+):
+    """The call ``run_solver`` times, for a round-robin of several configurations
+    (``timing.round_robin``; ``benchmarks/``): in process ``(SolveResult, None)``; a peer
+    ``((answer, u), (solve wall s, solve CPU s))`` (``peers.driver_call``, ``peers.outcome``)."""
+    if config.peer:
+        from signorini.studies.work_precision.peers import driver_call
+
+        return driver_call(config, peer, tol, time_limit_s, initial_guess)
+    limit = None if config.exact else time_limit_s
+    return _in_process_call(config, disc, tol, solver_options(config, tol, limit)[0])
+
+
 def run_solver(
     config: SolverConfig,
     disc,
     tol: float | None,
     time_limit_s: float | None = None,
-    repeat_below_s: float = REPEAT_BELOW_S,
-    repeats: int = REPEATS,
+    timer: Timer | None = None,
+    kernel: ReferenceKernel | None = None,
     peer=None,
+    initial_guess: np.ndarray | None = None,
 ) -> Attempt:
     """Solve ``disc`` (a ``DiscreteProblem``) with ``config`` at tolerance ``tol`` (None: the
     solver's default; ignored by the active-set solver); never raises.  A PETSc peer runs by
-    ``peer`` (a ``peers.PeerRoute``).
+    ``peer`` (a ``peers.PeerRoute``), from ``initial_guess`` when given.
 
-    Timing: wall time of the call; repeated (best of ``repeats``) when the first call takes
-    less than ``repeat_below_s``.  The status compares the worst relative KKT residual with
-    ``tol`` (or the solver's default tolerance, or the active-set certificate's 1e-10).
+    Timing: the protocol of ``timing`` (``timer``; the reference ``kernel`` defaults to one on
+    ``disc.A``); the record fields are in ``Attempt.extra["timing"]``.  The status compares the
+    worst relative KKT residual with ``tol`` (or the solver's default tolerance, or the
+    active-set certificate's 1e-10).
     """
+    timer = timer or Timer()
+    kernel = kernel or ReferenceKernel(disc.A)
     if config.peer:
         from signorini.studies.work_precision.peers import run_peer
 
-        out = run_peer(config, peer, disc, tol, time_limit_s, repeat_below_s, repeats)
+        out = run_peer(config, peer, disc, tol, time_limit_s, timer, kernel, initial_guess)
         return Attempt(out.result, out.status, out.reason, out.times, out.extra)
-    from signorini.fem.solve import solve_discrete
-    from signorini.solvers import cvxpy_solve
-    from signorini.solvers.cvxpy_qp import TOLERANCE_OPTIONS
-
-    options = dict(config.options)
     limit = None if config.exact else time_limit_s
-    if config.exact:
-        warm = options.pop("warm_start", "cascade")
-        required = float(options.get("kkt_tol", 1e-10))
-    else:
-        if limit is not None and config.solver in TIME_LIMIT_OPTIONS:
-            options.setdefault(TIME_LIMIT_OPTIONS[config.solver], float(limit))
-        default = TOLERANCE_OPTIONS.get(config.solver, ((), math.nan))[1]
-        required = float(tol) if tol is not None else float(default)
-
-    def call():
-        if config.exact:
-            return solve_discrete(disc, config.solver, warm_start=warm, **options)
-        return cvxpy_solve(disc.A, disc.b, disc.boundary, config.solver, tol=tol, check=False, **options)
-
-    times: list[float] = []
-    result = None
+    options, required = solver_options(config, tol, limit)
     with _solver_log(config.solver) as (log_options, log_path):
         options.update(log_options)
-        for k in range(repeats):
-            t0 = time.perf_counter()
-            try:
-                result = call()
-            except Exception as err:  # a failing solver is recorded, never raised
-                elapsed = time.perf_counter() - t0
-                status, reason = classify_failure(err, elapsed, limit)
-                detail = _log_reason(log_path)
-                if detail and "time limit" not in reason:  # the solver's own words instead of cvxpy's
-                    reason = f"{reason.split(':')[0]}: {detail}"
-                log.info("%s tol=%s: %s (%s) after %.2f s", config.name, tol, status, reason, elapsed)
-                return Attempt(None, status, reason, [*times, elapsed])
-            times.append(time.perf_counter() - t0)
-            if k == 0 and times[0] >= repeat_below_s:
-                break
+        call = _in_process_call(config, disc, tol, options)
+        try:
+            measured = timer.measure(call, kernel)
+        except CallFailed as err:  # a failing solver is recorded, never raised
+            status, reason = classify_failure(err.error, err.elapsed, limit)
+            detail = _log_reason(log_path)
+            if detail and "time limit" not in reason:  # the solver's own words instead of cvxpy's
+                reason = f"{reason.split(':')[0]}: {detail}"
+            log.info("%s tol=%s: %s (%s) after %.2f s", config.name, tol, status, reason, err.elapsed)
+            return Attempt(None, status, reason, [*(x.cpu_s for x in err.samples), err.elapsed])
+    result = measured.result
+    extra = {"timing": measured.summary(timer.protocol, timer.machine.cores)}
+    times = [x.cpu_s for x in measured.samples]
     worst = result.certificate.worst
     if not np.isfinite(worst) or worst > required:
-        return Attempt(result, "inaccurate", f"KKT residual {worst:.1e} > tolerance {required:.0e}", times)
-    return Attempt(result, "ok", "", times)
+        return Attempt(result, "inaccurate", f"KKT residual {worst:.1e} > tolerance {required:.0e}", times, extra)
+    return Attempt(result, "ok", "", times, extra)
 
 
-def _warm_up(config: SolverConfig) -> None:
+def warm_up(config: SolverConfig) -> None:
     """Load the solver's libraries with a 3-unknown QP, so the first timed call pays no import."""
     if config.exact or config.peer:  # a peer starts a fresh process per run anyway
         return
@@ -250,6 +281,10 @@ class _Inputs:
     prev: dict[str, dict]
     conventions: Any  # fem.norms.Conventions
     peer: Any = None  # peers.PeerRoute of a PETSc peer's job
+    timer: Timer = field(default_factory=Timer)
+    kernel: ReferenceKernel | None = None
+    start: np.ndarray | None = None  # the cascade's start, for a configuration started from it
+    start_timing: dict = field(default_factory=dict)
 
 
 def _load_inputs(at: SceneMesh, inputs: Mapping[str, Any], conventions: Mapping | None) -> _Inputs:
@@ -267,6 +302,21 @@ def _load_inputs(at: SceneMesh, inputs: Mapping[str, Any], conventions: Mapping 
     return _Inputs(disc, exact, disc_err, build_s, prev, Conventions(**dict(conventions or {})))
 
 
+def _cascade_start(inp: _Inputs, config: SolverConfig) -> str | None:
+    """For a peer started from the cascade: compute and time the start (``inp.start``,
+    ``inp.start_timing``); the reason to skip when the cascade has no coarse level at this N."""
+    if not (config.peer and config.initial == "cascade"):
+        return None
+    from signorini.fem.solve import CASCADE_FACTOR, CASCADE_MIN_N, cascade_start
+
+    measured = inp.timer.measure(lambda: (cascade_start(inp.disc), None), inp.kernel, accept=lambda u: True)
+    if measured.result is None:
+        return f"no cascade start below N = {CASCADE_FACTOR * CASCADE_MIN_N} (the cascade solves cold there)"
+    inp.start = measured.result
+    inp.start_timing = measured.summary(inp.timer.protocol, inp.timer.machine.cores)
+    return None
+
+
 def _base_record(inp: _Inputs, config: SolverConfig, tol: float | None) -> dict[str, Any]:
     from signorini.fem.mesh import mesh_width
 
@@ -281,6 +331,7 @@ def _base_record(inp: _Inputs, config: SolverConfig, tol: float | None) -> dict[
         "tol": math.nan if tol is None else float(tol),
         "tol_label": tolerance_label(tol, config),
         "is_default": tol is None and not config.exact,
+        "start": config.initial,
         "load1": os.getloadavg()[0],
         "build_s": inp.build_s,
     }
@@ -293,16 +344,27 @@ def _measure(inp: _Inputs, config: SolverConfig, tol: float | None, time_limit: 
     from signorini.fem.norms import evaluate_norms
 
     names = list(inp.disc_err)
-    attempt = run_solver(config, inp.disc, tol, time_limit, peer=inp.peer)
+    attempt = run_solver(config, inp.disc, tol, time_limit, inp.timer, inp.kernel, inp.peer, inp.start)
     times = attempt.times or [math.nan]
+    extra = dict(attempt.extra)
+    timing = extra.pop("timing", {})
     record = {
         "status": attempt.status,
         "reason": attempt.reason,
-        "time_s": min(times) if attempt.result is not None else times[-1],
+        "time_s": times[-1],  # a failure without the protocol's summary: the time until it
         "time_runs": len(attempt.times),
         "times": " ".join(f"{t:.6g}" for t in attempt.times),
-        **attempt.extra,
+        **{k: v for k, v in timing.items() if v is not None},
+        **extra,
     }
+    if inp.start_timing and "time_s" in timing:  # the start's cost is part of the route, as in the cascade
+        record.update(
+            start_s=inp.start_timing["time_s"],
+            start_ref=inp.start_timing["time_ref"],
+            time_s=timing["time_s"] + inp.start_timing["time_s"],
+            time_ref=timing["time_ref"] + inp.start_timing["time_ref"],
+            wall_s=timing["wall_s"] + inp.start_timing["wall_s"],
+        )
     res = attempt.result
     if res is not None:
         record.update(
@@ -322,6 +384,39 @@ def _measure(inp: _Inputs, config: SolverConfig, tol: float | None, time_limit: 
     return record
 
 
+def _job_info(at, config, tolerances, time_limit, growth_exponent, inp: _Inputs, records: list, clock) -> dict:
+    """The measurement artifact: the records (with the job's wall time), the protocol, the job."""
+    started, t_job, load_start = clock
+    wall_s = time.perf_counter() - t_job
+    for r in records:
+        r["job_wall_s"], r["job_started"] = wall_s, started
+    info = {
+        "N": at.N,
+        "config": config.as_dict(),
+        "tolerances": [float(t) for t in tolerances],
+        "time_limit_s": time_limit,
+        "growth_exponent": float(growth_exponent),
+        "records": records,
+        **({"peer": inp.peer.probe} if inp.peer is not None else {}),
+        "timing": {
+            "protocol": inp.timer.protocol.as_dict(),
+            "max_load": inp.timer.max_load,
+            "cores": inp.timer.machine.cores,
+            "kernel": inp.kernel.description,
+            "waited_s": inp.timer.waited_s,
+            **({"start": inp.start_timing} if inp.start_timing else {}),
+        },
+        "job": {
+            "started": started,
+            "wall_s": wall_s,
+            "load1_start": load_start,
+            "load1_end": os.getloadavg()[0],
+            "note": "wall_s: perf_counter over the whole stage function (loading, warm-up, solves, norms)",
+        },
+    }
+    return info
+
+
 def measure_stage(
     at: SceneMesh,
     config: Mapping,
@@ -332,6 +427,7 @@ def measure_stage(
     conventions: Mapping | None = None,
     growth_exponent: float = GROWTH_EXPONENT,
     peer_python: str | None = None,
+    timing: Mapping | None = None,
 ) -> dict:
     """Stage ``work_precision_measure``: run one solver configuration (``SolverConfig.as_dict()``)
     on one mesh of the scene (``at``) at its default and at every tolerance of ``tolerances``; save the records (see
@@ -345,6 +441,9 @@ def measure_stage(
     after it plus ``peers.START_SLACK_S``) and drives ``skip_reason`` (for every configuration,
     the active-set ones included).  A PETSc peer runs ``inputs["peer_driver"]`` under
     ``peer_python``; its probe (PETSc version, inner solvers) is saved with the records.
+    ``timing``: the timing protocol's parameters (``timing.Protocol``; the study's ``timing`` block).
+    A configuration started from the cascade (``SolverConfig.initial``) gets the cascade's
+    interpolated coarse solution, computed (and timed) once per job; its cost is added to each run's time.
     """
     started, t_job, load_start = time.time(), time.perf_counter(), os.getloadavg()[0]
     config = SolverConfig(**config)
@@ -356,12 +455,16 @@ def measure_stage(
 
         python, driver = peer_python or PEER_PYTHON, str(inputs["peer_driver"])
         inp.peer = PeerRoute(python, driver, str(inputs["system"]), probe(python, driver))
-    _warm_up(config)
+    inp.timer = Timer(Protocol.from_mapping(timing))
+    inp.kernel = ReferenceKernel(inp.disc.A)
+    warm_up(config)
+    no_start = _cascade_start(inp, config)
     norm_cache: dict[str, dict[str, float]] = {_fingerprint(inp.exact): inp.disc_err}
     records = []
     for tol in planned_runs(config, tolerances):
         record = _base_record(inp, config, tol)
         skip = skip_reason(inp.prev.get(record["tol_label"]), record["n_dofs"], time_limit, float(growth_exponent))
+        skip = no_start or skip
         if skip is not None:
             record.update(status="skipped", reason=skip, time_s=math.nan, time_runs=0)
         else:
@@ -369,27 +472,15 @@ def measure_stage(
         record.update({f"disc_{n}": v for n, v in inp.disc_err.items()})
         records.append(record)
         log.info(
-            "N=%d %s %s: %s %s time %.3f s, L4 alg %.2e", at.N, config.name, record["tol_label"], record["status"],
-            record["reason"], record["time_s"], record.get("alg_L4", math.nan),
+            "N=%d %s %s: %s %s time %.3f s, L4 alg %.2e",
+            at.N,
+            config.name,
+            record["tol_label"],
+            record["status"],
+            record["reason"],
+            record["time_s"],
+            record.get("alg_L4", math.nan),
         )
-    wall_s = time.perf_counter() - t_job
-    for r in records:
-        r["job_wall_s"], r["job_started"] = wall_s, started
-    info = {
-        "N": at.N,
-        "config": config.as_dict(),
-        "tolerances": [float(t) for t in tolerances],
-        "time_limit_s": time_limit,
-        "growth_exponent": float(growth_exponent),
-        "records": records,
-        **({"peer": inp.peer.probe} if inp.peer is not None else {}),
-        "job": {
-            "started": started,
-            "wall_s": wall_s,
-            "load1_start": load_start,
-            "load1_end": os.getloadavg()[0],
-            "note": "wall_s: perf_counter over the whole stage function (loading, warm-up, solves, norms)",
-        },
-    }
+    info = _job_info(at, config, tolerances, time_limit, growth_exponent, inp, records, (started, t_job, load_start))
     save_json(out_json, info)
     return info

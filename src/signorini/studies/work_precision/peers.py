@@ -107,48 +107,95 @@ class PeerOutcome:
     extra: dict[str, Any] = field(default_factory=dict)
 
 
+def driver_call(
+    config: SolverConfig,
+    route: PeerRoute,
+    tol: float | None,
+    time_limit_s: float | None,
+    initial_guess: np.ndarray | None = None,
+):
+    """A callable for ``timing.Timer``: one run of the driver (one solve), returning
+    ``((answer, u), (solve wall s, solve CPU s))`` — the driver's own timers around PETSc's
+    ``solve`` — or ``((answer, None), None)`` when it gave no solution (timed from outside)."""
+    request = {
+        "kind": PEER_SOLVERS[config.solver],
+        "options": dict(config.options),
+        "tol": None if tol is None else float(tol),
+        "repeat_below_s": 0.0,
+        "repeats": 1,  # the repeats are the timing protocol's
+    }
+    timeout = None if time_limit_s is None else float(time_limit_s) + START_SLACK_S
+
+    def call():
+        with tempfile.TemporaryDirectory(prefix="wp-peer-") as tmp:
+            req = dict(request)
+            if initial_guess is not None:
+                np.savez(Path(tmp) / "start.npz", u=initial_guess)
+                req["initial_guess"] = str(Path(tmp) / "start.npz")
+            (Path(tmp) / "request.json").write_text(json.dumps(req), encoding="utf-8")
+            command = [route.python, route.driver, "solve", route.system, str(Path(tmp) / "request.json"), tmp]
+            try:
+                proc = subprocess.run(command, capture_output=True, encoding="utf-8", timeout=timeout, env=_env())
+            except subprocess.TimeoutExpired:
+                return ({"status": "timeout", "reason": f"time limit ({time_limit_s:g} s)"}, None), None
+            if proc.returncode != 0 or not (Path(tmp) / "result.json").exists():
+                reason = f"driver exited {proc.returncode}: {_last_line(proc.stderr)}"
+                return ({"status": "error", "reason": reason}, None), None
+            answer = json.loads((Path(tmp) / "result.json").read_text(encoding="utf-8"))
+            if answer.get("status") != "done":
+                return (answer, None), None
+            u = np.load(Path(tmp) / "solution.npz")["u"]
+        return (answer, u), (float(answer["solve_s"]), float(answer.get("solve_cpu_s", answer["solve_s"])))
+
+    return call
+
+
+def converged(result) -> bool:
+    """Whether a ``driver_call`` result is a converged answer (else the protocol stops repeating)."""
+    answer, u = result
+    return u is not None and bool(answer.get("converged"))
+
+
 def run_peer(
     config: SolverConfig,
     route: PeerRoute,
     disc,
     tol: float | None,
     time_limit_s: float | None,
-    repeat_below_s: float,
-    repeats: int,
+    timer,
+    kernel,
+    initial_guess: np.ndarray | None = None,
 ) -> PeerOutcome:
-    """Run ``config`` (a peer) at tolerance ``tol`` (None: PETSc's defaults) on ``route.system``;
-    certify its answer against ``disc`` (``A``, ``b``, ``boundary``).  Never raises."""
+    """Run ``config`` (a peer) at tolerance ``tol`` (None: PETSc's defaults) on ``route.system``
+    under the timing protocol (``timer``, a ``timing.Timer``, with the reference ``kernel``),
+    from u = 0 or from ``initial_guess``; certify its answer against ``disc`` (``A``, ``b``,
+    ``boundary``).  Never raises."""
+    from signorini.studies.work_precision.timing import CallFailed
+
     if not route.available:
         return PeerOutcome(None, "skipped", route.reason, [])
-    request = {
-        "kind": PEER_SOLVERS[config.solver],
-        "options": dict(config.options),
-        "tol": None if tol is None else float(tol),
-        "repeat_below_s": float(repeat_below_s),
-        "repeats": int(repeats),
-    }
-    timeout = None if time_limit_s is None else float(time_limit_s) + START_SLACK_S
-    with tempfile.TemporaryDirectory(prefix="wp-peer-") as tmp:
-        (Path(tmp) / "request.json").write_text(json.dumps(request), encoding="utf-8")
-        command = [route.python, route.driver, "solve", route.system, str(Path(tmp) / "request.json"), tmp]
-        try:
-            proc = subprocess.run(command, capture_output=True, encoding="utf-8", timeout=timeout, env=_env())
-        except subprocess.TimeoutExpired:
-            return PeerOutcome(None, "failed", f"time limit ({time_limit_s:g} s)", [float(timeout or 0.0)])
-        if proc.returncode != 0 or not (Path(tmp) / "result.json").exists():
-            return PeerOutcome(None, "failed", f"driver exited {proc.returncode}: {_last_line(proc.stderr)}", [])
-        answer = json.loads((Path(tmp) / "result.json").read_text(encoding="utf-8"))
-        u = np.load(Path(tmp) / "solution.npz")["u"] if answer.get("status") == "done" else None
-    return _outcome(config, disc, tol, answer, u)
+    call = driver_call(config, route, tol, time_limit_s, initial_guess)
+    try:
+        measured = timer.measure(call, kernel, accept=converged)
+    except CallFailed as err:  # OSError starting the interpreter, a corrupt answer file, ...
+        return PeerOutcome(None, "failed", f"{type(err.error).__name__}: {err.error}"[:300], [err.elapsed])
+    answer, u = measured.result
+    timing = measured.summary(timer.protocol, timer.machine.cores)
+    if answer.get("status") in ("timeout", "error"):  # no solve to time: the wall time until the end
+        times = [measured.samples[-1].wall_s] if answer["status"] == "timeout" else []
+        return PeerOutcome(None, "failed", str(answer["reason"]), times, {"timing": {"load1": timing.get("load1")}})
+    out = outcome(config, disc, tol, answer, u)
+    out.extra["timing"] = timing
+    return out
 
 
-def _outcome(config: SolverConfig, disc, tol: float | None, answer: dict, u) -> PeerOutcome:
+def outcome(config: SolverConfig, disc, tol: float | None, answer: dict, u) -> PeerOutcome:
     """Status, certificate and record fields of a driver's answer."""
     extra = {
         "setup_s": float(answer["setup_s"]) if "setup_s" in answer else float("nan"),
         "converged_reason": str(answer.get("converged_reason", "")),
         "peer_info": peer_info(answer),
-        "peer": {k: answer.get(k) for k in ("petsc_version", "options", "effective", "python", "setup_times")},
+        "peer": {k: answer.get(k) for k in ("petsc_version", "options", "effective", "python", "setup_times", "start")},
     }
     if answer.get("status") == "unavailable":
         return PeerOutcome(None, "skipped", str(answer["reason"]), [], extra)
@@ -156,7 +203,7 @@ def _outcome(config: SolverConfig, disc, tol: float | None, answer: dict, u) -> 
         return PeerOutcome(None, "failed", str(answer.get("reason", answer.get("status"))), [], extra)
     required = DEFAULT_TOL if tol is None else float(tol)
     result = peer_result(config.name, disc.A, disc.b, disc.boundary, u, required, answer)
-    times = [float(t) for t in answer["solve_times"]]
+    times = [float(t) for t in answer.get("solve_cpu_times", answer["solve_times"])]
     if not answer["converged"]:
         return PeerOutcome(result, "failed", f"PETSc {answer['converged_reason']}", times, extra)
     worst = result.certificate.worst

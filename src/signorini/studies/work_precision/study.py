@@ -17,6 +17,8 @@ GROWTH_EXPONENT = 1.5  # predicted time ∝ (number of unknowns)^GROWTH_EXPONENT
 # solver name → the kind of PETSc object the driver builds
 PEER_SOLVERS = {"petsc_snes": "snes", "petsc_tao": "tao"}
 PEER_PYTHON = "/usr/bin/python3"  # Debian's python3-petsc4py-real is built for it
+CASCADE_START = "cascade"
+WARM_SUFFIX = "_ws"  # name of a peer's variant started from the cascade (``same_warm_start``)
 
 
 class StudyConfigError(ValueError):
@@ -35,6 +37,7 @@ class SolverConfig:
     solver: str
     label: str
     options: dict = field(default_factory=dict)
+    start: str = "cold"  # a peer's initial guess: "cold" (u = 0) or "cascade" (CASCADE_START)
 
     @property
     def exact(self) -> bool:
@@ -44,19 +47,30 @@ class SolverConfig:
         return self.solver in exact_routes()
 
     @property
+    def initial(self) -> str:
+        """Where the solver starts: ``cascade`` (the cascade's interpolated coarse solution) or ``cold``."""
+        if self.exact:
+            return "cold" if "warm_start" in self.options and self.options["warm_start"] is None else "cascade"
+        return self.start
+
+    @property
     def peer(self) -> bool:
         """A PETSc method, run by the external driver (``peers``)."""
         return self.solver in PEER_SOLVERS
 
     def as_dict(self) -> dict:
-        return {"name": self.name, "solver": self.solver, "label": self.label, "options": dict(self.options)}
+        out = {"name": self.name, "solver": self.solver, "label": self.label, "options": dict(self.options)}
+        return out if self.start == "cold" else {**out, "start": self.start}
 
 
 def study_configs(study: Mapping, installed: Sequence[str] = ()) -> dict[str, SolverConfig]:
     """The configurations of a ``study`` block: its ``configs`` (name → ``{solver, label, options}``)
     plus, with ``qp_solvers: installed`` (the QP solvers ``installed``, e.g.
     ``signorini.solvers.installed_qp_solvers()``) or a list of names, one configuration per cvxpy
-    QP solver, named by the lower-case solver name, unless a configuration of that name exists."""
+    QP solver, named by the lower-case solver name, unless a configuration of that name exists.
+    With ``same_warm_start: true`` every PETSc peer also gets a variant ``<name>_ws`` that starts
+    from the cascade's interpolated coarse solution (cvxpy's QP interfaces take no initial guess:
+    their ``warm_start`` reuses the previous solve of the same problem only)."""
     from signorini.pipeline.solver_options import check_options, exact_routes
 
     out: dict[str, SolverConfig] = {}
@@ -71,6 +85,11 @@ def study_configs(study: Mapping, installed: Sequence[str] = ()) -> dict[str, So
         name = solver.lower()
         if name not in out:
             out[name] = SolverConfig(name, solver.upper(), solver.upper(), {})
+    if study.get("same_warm_start"):
+        for name, config in list(out.items()):
+            if config.peer and config.start == "cold" and name + WARM_SUFFIX not in out:
+                warm, label = name + WARM_SUFFIX, f"{config.label} (cascade start)"
+                out[warm] = SolverConfig(warm, config.solver, label, config.options, CASCADE_START)
     for name, config in out.items():
         if not re.fullmatch(r"[a-z0-9_]+", name):
             raise StudyConfigError(f"configuration name {name!r}: use lower-case letters, digits and _")

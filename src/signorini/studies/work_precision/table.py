@@ -26,9 +26,19 @@ ID_COLUMNS = [
     "is_default",
     "status",
     "reason",
+    "start",
     "time_s",
+    "wall_s",
+    "time_ref",
+    "ref_s",
+    "cpu_share",
+    "spread",
     "time_runs",
+    "rejected",
+    "loaded",
+    "time_stop",
     "times",
+    "start_s",
     "solver_time_s",
     "setup_s",
     "converged_reason",
@@ -44,6 +54,7 @@ ID_COLUMNS = [
     "job_wall_s",
     "job_started",
     "load1",
+    "load1_max",
 ]
 
 
@@ -71,7 +82,7 @@ def read_measurements(path: str | os.PathLike) -> pd.DataFrame:
     import pandas as pd
 
     try:
-        dtype = {"reason": str, "times": str, "tol_label": str, "converged_reason": str, "peer_info": str}
+        dtype = {"reason": str, "times": str, "tol_label": str, "converged_reason": str, "peer_info": str, "start": str}
         df = pd.read_csv(path, dtype=dtype, keep_default_na=True, encoding="utf-8")
     except (OSError, ValueError) as err:
         raise CorruptArtifactError(f"{path}: unreadable CSV ({err})") from err

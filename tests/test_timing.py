@@ -1,0 +1,187 @@
+"""The timing protocol (``signorini.studies.work_precision.timing``) on a fake machine: a
+sample under a load above the cores is rejected and redone later, reference units cancel a
+uniform slowdown, the repeats stop on a small spread, at the cap or at the budget."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from signorini.studies.work_precision import timing
+
+
+class FakeMachine(timing.Machine):
+    """A machine whose clocks advance only by the work done: ``work(seconds)`` advances the CPU
+    clock by ``seconds × slowdown`` and the wall clock by that over the CPU share; the load is
+    read from a script (one value per reading, the last repeated)."""
+
+    def __init__(self, loads=(0.5,), slowdown=1.0, share=1.0, cores=2):
+        super().__init__(lambda: self.t_wall, lambda: self.t_cpu, self._load, self._sleep, cores)
+        self.t_wall = self.t_cpu = 0.0
+        self.loads, self.slowdown, self.share, self.slept = list(loads), slowdown, share, 0.0
+
+    def _load(self) -> float:
+        return self.loads.pop(0) if len(self.loads) > 1 else self.loads[0]
+
+    def _sleep(self, s: float) -> None:
+        self.slept += s
+        self.t_wall += s
+
+    def work(self, seconds: float) -> None:
+        self.t_cpu += seconds * self.slowdown
+        self.t_wall += seconds * self.slowdown / self.share
+
+
+class FakeKernel:
+    """A reference kernel of 0.1 s of work on the fake machine."""
+
+    def __init__(self, machine: FakeMachine):
+        self.machine = machine
+        self.description = "fake"
+
+    def run(self):
+        w0, c0 = self.machine.wall(), self.machine.cpu()
+        self.machine.work(0.1)
+        return self.machine.wall() - w0, self.machine.cpu() - c0
+
+
+def solver(machine: FakeMachine, seconds: float):
+    def call():
+        machine.work(seconds)
+        return "answer", None
+
+    return call
+
+
+FAST = timing.Protocol(min_repeats=3, max_repeats=5, spread=0.05, budget_s=100.0, retries=2, wait_s=5.0, poll_s=1.0)
+
+
+def test_a_sample_under_a_load_above_the_cores_is_redone():
+    """Readings before/after each call: the first sample sees load 5 on 2 cores; it is rejected,
+    the timer waits for the load to fall, and the measurement is redone: 3 accepted samples."""
+    m = FakeMachine(loads=[0.5, 5.0, 5.0, 0.5])
+    measured = timing.Timer(FAST, m).measure(solver(m, 0.2), FakeKernel(m))
+    assert len(measured.rejected) == 1 and measured.rejected[0].rejected == "load 5.00 > 2"
+    assert len(measured.samples) == 3 and not any(s.rejected for s in measured.samples)
+    assert measured.waited_s == 0.0  # the load had fallen when the redo started
+    summary = measured.summary(FAST, 2)
+    assert summary["rejected"] == 1 and not summary["loaded"] and summary["time_stop"] == "spread"
+    assert summary["time_s"] == pytest.approx(0.2) and summary["time_ref"] == pytest.approx(2.0)
+
+
+def test_a_lasting_load_is_waited_for_then_accepted_and_flagged():
+    """A load that never falls: bounded waits (``wait_s`` per redo), ``retries`` redos, then the
+    samples are accepted and the record says ``loaded``."""
+    m = FakeMachine(loads=[8.0])
+    measured = timing.Timer(FAST, m).measure(solver(m, 0.2), FakeKernel(m))
+    assert len(measured.rejected) == FAST.retries and len(measured.samples) == 3
+    assert m.slept == pytest.approx(FAST.wait_s * (FAST.retries + 3))  # every sample waited its bound
+    summary = measured.summary(FAST, 2)
+    assert summary["loaded"] and summary["load1"] == 8.0 and summary["rejected"] == FAST.retries
+
+
+def test_a_low_cpu_share_is_rejected():
+    m = FakeMachine(share=0.5)
+    measured = timing.Timer(FAST, m).measure(solver(m, 0.2), FakeKernel(m))
+    assert measured.rejected and measured.rejected[0].rejected.startswith("CPU share 0.50")
+    assert measured.summary(FAST, 2)["cpu_share"] == pytest.approx(0.5)
+
+
+def test_reference_units_cancel_a_uniform_slowdown():
+    """A machine 2.3× slower (contention: CPU time grows) and time-shared (CPU share 0.95):
+    seconds change, reference units and ratios do not."""
+    protocol = timing.Protocol(max_load=100.0, min_cpu_share=0.5)
+    out = {}
+    for slowdown, share in ((1.0, 1.0), (2.3, 0.95)):
+        m = FakeMachine(slowdown=slowdown, share=share)
+        t = timing.Timer(protocol, m)
+        out[slowdown] = [t.measure(solver(m, s), FakeKernel(m)).summary(protocol, 2) for s in (0.3, 1.2)]
+    quiet, slow = out[1.0], out[2.3]
+    assert slow[0]["time_s"] == pytest.approx(2.3 * quiet[0]["time_s"])
+    assert slow[0]["wall_s"] == pytest.approx(2.3 / 0.95 * quiet[0]["wall_s"])
+    for q, s in zip(quiet, slow, strict=True):
+        assert s["time_ref"] == pytest.approx(q["time_ref"]) and s["wall_ref"] == pytest.approx(q["wall_ref"])
+    assert slow[1]["time_ref"] / slow[0]["time_ref"] == pytest.approx(4.0)
+
+
+def test_repeats_stop_at_the_cap_and_at_the_budget():
+    m = FakeMachine()
+    noisy = iter([0.1, 0.2, 0.1, 0.2, 0.1, 0.2, 0.1])
+
+    def call():
+        m.work(next(noisy))
+        return "answer", None
+
+    measured = timing.Timer(FAST, m).measure(call, FakeKernel(m))
+    assert len(measured.samples) == FAST.max_repeats and measured.stop == "max_repeats"
+    assert measured.summary(FAST, 2)["spread"] == pytest.approx(1.0)  # reference units 1, 2, 1, 2, 1
+    m = FakeMachine()
+    long = timing.Protocol(budget_s=1.0)
+    measured = timing.Timer(long, m).measure(solver(m, 3.0), FakeKernel(m))
+    assert len(measured.samples) == 1 and measured.stop == "budget"
+
+
+def test_a_failed_answer_stops_and_an_exception_is_carried():
+    m = FakeMachine(loads=[9.0])
+    measured = timing.Timer(FAST, m).measure(solver(m, 0.2), FakeKernel(m), accept=lambda r: False)
+    assert len(measured.samples) == 1 and not measured.rejected and measured.stop == "answer rejected"
+
+    def boom():
+        m.work(0.5)
+        raise RuntimeError("diverged")
+
+    with pytest.raises(timing.CallFailed) as err:
+        timing.Timer(FAST, FakeMachine()).measure(boom, FakeKernel(m))
+    assert str(err.value.error) == "diverged" and err.value.samples == []
+
+
+def test_a_callee_that_times_itself():
+    """A peer's driver times its own solve: (wall, CPU) returned by the call replace the outer clocks."""
+    m = FakeMachine()
+
+    def call():
+        m.work(1.0)  # interpreter start, imports, set-up: not the solve
+        return "answer", (0.25, 0.24)
+
+    measured = timing.Timer(FAST, m).measure(call, FakeKernel(m))
+    assert measured.summary(FAST, 2)["time_s"] == pytest.approx(0.24)
+    assert measured.summary(FAST, 2)["cpu_share"] == pytest.approx(0.96)
+
+
+def test_round_robin_redoes_a_rejected_sample_after_the_others():
+    m = FakeMachine()
+    order = []
+    kernel = FakeKernel(m)
+    rejected_once = {"b"}
+
+    def task(name, seconds):
+        def call():
+            m.work(seconds)
+            # the load reading after b's first call is high: b's sample is rejected
+            m.loads = [9.0, 0.5] if name in rejected_once else [0.5]
+            rejected_once.discard(name)
+            return name, None
+
+        return timing.Task(name, call, kernel)
+
+    tasks = [task("a", 0.2), task("b", 0.4), task("c", 0.3)]
+    timing.round_robin(timing.Timer(FAST, m), tasks, on_sample=lambda t, s: order.append((t.name, bool(s.rejected))))
+    assert order[:4] == [("a", False), ("b", True), ("c", False), ("b", False)]
+    for t in tasks:
+        assert len(t.samples) == 3 and t.stop == "spread"
+    summary = timing.task_summary(timing.Timer(FAST, m), tasks[1])
+    assert summary["rejected"] == 1 and summary["time_ref"] == pytest.approx(4.0)
+
+
+def test_protocol_from_mapping_and_the_reference_kernel():
+    assert timing.Protocol.from_mapping({"retries": 0}).retries == 0
+    with pytest.raises(ValueError, match="unknown keys"):
+        timing.Protocol.from_mapping({"retry": 1})
+    n = 400
+    A = sp.diags([-np.ones(n - 1), 4 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1], format="csr")
+    kernel = timing.ReferenceKernel(A, matvecs=5)
+    wall, cpu = kernel.run()
+    assert wall > 0 and cpu >= 0 and kernel.description.endswith("5 CSR products), n = 400")
+    assert kernel.repeats == 50  # a small system's kernel is repeated up to 20 000 unknowns
+    assert timing.spread([1.0, 1.1, 0.9]) == pytest.approx(0.2) and timing.spread([1.0]) == 0.0
