@@ -48,6 +48,20 @@ def sig_csv(x: float, digits: int) -> str:
     return f"{x:.{digits - 1}e}"
 
 
+def certified_errors(errors, uncertainties, norms: Sequence[str]) -> tuple[list[list[float]], list[list[int]]]:
+    """Per row of the frame ``errors`` and norm: the value rounded to its certified digits, and those
+    digits (``uncertainties``: the same frame with the uncertainties; ``None``: the paper's 5 digits).
+    What Table 1 prints and Figure 3 draws."""
+    values, digits = [], []
+    for i in range(len(errors)):
+        row = [float(errors[n].iloc[i]) for n in norms]
+        unc = [0.0] * len(norms) if uncertainties is None else [float(uncertainties[n].iloc[i]) for n in norms]
+        d = [certified_digits(v, u) for v, u in zip(row, unc, strict=True)]
+        digits.append(d)
+        values.append([round_sig(v, k) for v, k in zip(row, d, strict=True)])
+    return values, digits
+
+
 def h_label(N: int | str) -> str:
     """The paper's row label ``1/N``."""
     return f"1/{int(N)}"

@@ -5,7 +5,7 @@ the stages ``figure2`` and ``figure3`` save them.
 ``L⁴`` and ``W^{1,4}`` errors against ``h`` with reference slopes of the expected orders.
 
 The stages draw rounded data, so that round-off of another processor cannot move a single
-coordinate in the PDF: Figure 3 the errors as Table 1 prints them (``tables.certified_errors``),
+coordinate in the PDF: Figure 3 the errors as Table 1 prints them (``formatting.certified_errors``),
 Figure 2 the sampled fields to ``FIELD_DIGITS`` significant digits.
 """
 
@@ -96,7 +96,7 @@ def figure3_stage(
 ) -> None:
     """Stage ``figure3``: Figure 3 from the norm artifacts of the rendered scene, each error rounded
     to the digits Table 1 prints."""
-    from signorini.studies.paper.tables import certified_errors
+    from signorini.formatting import certified_errors
     from signorini.studies.scene.store import read_errors, read_uncertainties
 
     errors = read_errors(scene_N, norm_jsons)

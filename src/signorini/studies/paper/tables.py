@@ -16,11 +16,10 @@ import numpy as np
 
 from signorini.formatting import (
     certified_decimals,
-    certified_digits,
+    certified_errors,
     csv_text,
     h_label,
     md_table,
-    round_sig,
     sci_md,
     sci_tex,
     sig_csv,
@@ -66,19 +65,6 @@ def _write(outs: Mapping[str, str | os.PathLike], csv: str, md: str, tex: str) -
     atomic_write_text(outs["csv"], csv)
     atomic_write_text(outs["md"], md)
     atomic_write_text(outs["tex"], tex)
-
-
-def certified_errors(errors, uncertainties, norms: Sequence[str]) -> tuple[list[list[float]], list[list[int]]]:
-    """Per row of ``errors`` and norm: the value rounded to its certified digits, and those digits
-    (``uncertainties``: the same frame with the uncertainties; ``None``: the paper's 5 digits)."""
-    values, digits = [], []
-    for i in range(len(errors)):
-        row = [float(errors[n].iloc[i]) for n in norms]
-        unc = [0.0] * len(norms) if uncertainties is None else [float(uncertainties[n].iloc[i]) for n in norms]
-        d = [certified_digits(v, u) for v, u in zip(row, unc, strict=True)]
-        digits.append(d)
-        values.append([round_sig(v, k) for v, k in zip(row, d, strict=True)])
-    return values, digits
 
 
 def error_rows(errors, uncertainties, norms: Sequence[str]) -> tuple[list[str], list[list[tuple[float, int]]]]:
