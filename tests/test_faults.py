@@ -44,7 +44,7 @@ def test_a_non_finite_norm_value_fails_the_norm_job(solved, monkeypatch, tmp_pat
     import signorini.studies.scene.norm as stage
 
     d, at = solved
-    monkeypatch.setattr(stage, "evaluate_norms", lambda *args, **kwargs: {"L4": bad})
+    monkeypatch.setattr(stage, "evaluate_named_norms", lambda *args, **kwargs: {"L4": bad})
     with pytest.raises(ValueError, match="not a finite non-negative number"):
         norm_stage(at, d / "solution.npz", "L4", tmp_path / "L4.json", {})
     assert not (tmp_path / "L4.json").exists()
