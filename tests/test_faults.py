@@ -667,6 +667,37 @@ def test_a_changed_parameter_or_scene_reruns_without_snakemakes_metadata(tiny_bu
     assert not list((repo / "results").rglob("*.corrupt"))
 
 
+@pytest.mark.slow
+def test_the_papers_tables_follow_a_changed_mesh_list_without_snakemakes_metadata(tiny_built, tmp_path):
+    """The rendered scene's N list changed with ``.snakemake`` gone (mtime trigger): Tables 1-2,
+    Figure 3 and the reproduction report are out of date and rendered for exactly the new meshes."""
+    import shutil
+
+    from helpers import clone_built, snakemake
+
+    repo = clone_built(tiny_built, tmp_path / "repo")
+    shutil.rmtree(repo / ".snakemake")
+    _set_scene(repo, N=[11, 21, 31])
+    proc = snakemake(repo, "-c2", "--rerun-triggers", "mtime", "--", "all")
+    assert "out of date: " in proc.stderr and "paper_figures/table1.csv holds the rows h = 1/11, 1/21" in proc.stderr
+    table1 = read_errors_csv(repo / "paper_figures/table1.csv")
+    table2 = read_errors_csv(repo / "paper_figures/table2.csv")
+    assert list(table1.rows) == ["1/11", "1/21", "1/31"] and list(table2.rows) == ["1/21", "1/31", "regr.", "theo."]
+    assert "1/31" in (repo / "paper_figures/reproduction.md").read_text(encoding="utf-8")
+
+
+def test_rendered_tables_of_other_meshes_are_named(tmp_path):
+    from signorini.pipeline.cache import rendered_mismatch
+
+    t1, t2 = tmp_path / "table1.csv", tmp_path / "table2.csv"
+    t1.write_text("h,L4\n1/11,1e-3\n1/21,3e-4\n", encoding="utf-8")
+    t2.write_text("h,L4\n1/21,1.9\nregr.,1.9\ntheo.,2.0\n", encoding="utf-8")
+    tables = {"table1": t1, "table2": t2}
+    assert rendered_mismatch(tables, [11, 21]) is None
+    assert "holds the rows h = 1/11, 1/21" in rendered_mismatch(tables, [11, 21, 41])
+    assert rendered_mismatch({"table1": tmp_path / "absent.csv"}, [11]) is None
+
+
 class _Table:
     def __init__(self, text: str) -> None:
         import csv

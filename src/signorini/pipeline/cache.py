@@ -98,6 +98,38 @@ def table_mismatch(path: Path, shape: TableShape | None) -> str | None:
     return None
 
 
+def rendered_mismatch(tables: Mapping[str, str | os.PathLike], Ns: Sequence[int]) -> str | None:
+    """Why the paper's rendered tables (``{"table1": csv, "table2": csv}``) are out of date: they
+    hold other meshes than the rendered scene's ``Ns`` (a changed ``N`` list; Snakemake's own
+    record of the inputs may be gone).  None when they hold exactly those, or do not exist."""
+    labels = [f"1/{int(N)}" for N in Ns]
+    expected = {"table1": labels, "table2": [*labels[1:], "regr.", "theo."]}
+    for name, path in tables.items():
+        path = Path(path)
+        if not path.is_file():
+            continue
+        try:
+            rows = list(csv.reader(io.StringIO(path.read_text(encoding="utf-8"))))
+        except (OSError, UnicodeDecodeError, csv.Error):
+            return f"{path} cannot be read"
+        held = [row[0] for row in rows[1:] if row]
+        if held != expected[name]:
+            return f"{path} holds the rows h = {_listed(held)}, the rendered scene asks for {_listed(expected[name])}"
+    return None
+
+
+def remove_rendered(outputs: Iterable[str | os.PathLike], reason: str, execute: bool) -> list[str]:
+    """Delete the paper's rendered outputs of another state of the rendered scene (``reason``), so
+    that ``all`` renders them anew, or, in a read-only call, only name them."""
+    present = [str(path) for path in outputs if Path(path).exists()]
+    if present:
+        verb = "removed; rebuilt when a job needs them" if execute else "a run that needs them rebuilds them"
+        print(f"signorini: out of date: {reason}: {', '.join(present)} ({verb})", file=sys.stderr)
+        for path in present if execute else ():
+            os.remove(path)
+    return present
+
+
 def _benchmark_ok(path: Path) -> bool:
     """A complete Snakemake benchmark file: a header starting with ``s`` (seconds), at least one
     row with the header's number of fields and a finite, non-negative number of seconds."""
