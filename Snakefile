@@ -50,7 +50,7 @@ include: "workflow/rules/work_precision.smk"
 include: "workflow/rules/stability.smk"
 include: "workflow/rules/true_norms.smk"
 include: "workflow/rules/report.smk"
-include: "workflow/rules/cache.smk"
+include: "workflow/rules/integrity.smk"
 
 
 rule all:

@@ -34,7 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "src"))
 
 from signorini.pipeline.artifacts import load_json  # noqa: E402
-from signorini.pipeline.cache import artifact_ok  # noqa: E402
+from signorini.pipeline.integrity import artifact_ok  # noqa: E402
 
 SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
 SIGNALS = {"SIGINT": signal.SIGINT, "SIGTERM": signal.SIGTERM}

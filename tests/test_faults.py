@@ -18,8 +18,8 @@ import yaml
 from helpers import PROBLEM, ROOT
 
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json, save_json
-from signorini.pipeline.cache import artifact_ok, cached_artifacts, corrupt_artifacts
 from signorini.pipeline.config import ConfigError, check_config
+from signorini.pipeline.integrity import artifact_ok, cached_artifacts, corrupt_artifacts
 from signorini.studies.scene.discretise import discretise_stage
 from signorini.studies.scene.eoc import eoc_stage
 from signorini.studies.scene.norm import norm_stage
@@ -63,7 +63,7 @@ def test_a_nan_norm_artifact_never_reaches_a_table(solved, tmp_path):
 def test_a_table_that_lost_a_row_is_out_of_date(tmp_path, table, text, capsys):
     """A complete table without one of the scene's N (``sed -i '3d'``, or the N list changed) is a
     valid file of another state: removed and rebuilt, and called out of date, not corrupt."""
-    from signorini.pipeline.cache import remove_stale
+    from signorini.pipeline.integrity import remove_stale
 
     scene = {"N": [11, 21, 41], "norms": ["L4"]}
     path = tmp_path / "s" / table
@@ -248,7 +248,7 @@ def test_temporaries_left_by_a_killed_job_are_removed(tmp_path, monkeypatch):
     """``kill -9`` during an atomic write leaves ``.<name>.<random>.tmp``; the next run that
     executes jobs deletes it, unless another run holds the directory's lock (its jobs may be
     writing) or the file is fresh (a run with ``--nolock``)."""
-    from signorini.pipeline.cache import leftover_temporaries, remove_leftover_temporaries
+    from signorini.pipeline.integrity import leftover_temporaries, remove_leftover_temporaries
 
     monkeypatch.chdir(tmp_path)
     old = tmp_path / "results/smoke/N11/.solution.npz.x1y2.tmp"
@@ -369,7 +369,7 @@ def test_an_artifact_computed_with_other_parameters_is_out_of_date(tmp_path, cap
     """Its recorded code and inputs are current, only the parameters a job would get now differ
     (A 10 -> 20): out of date, and so is everything computed from it and the scene's tables."""
     from signorini.pipeline.artifacts import content_digest, recording
-    from signorini.pipeline.cache import remove_stale, stale_artifacts
+    from signorini.pipeline.integrity import remove_stale, stale_artifacts
 
     monkeypatch.chdir(tmp_path)  # the workflow names artifacts relative to its directory
     scene = Path("results/s")
@@ -407,7 +407,7 @@ def test_an_artifact_computed_with_other_parameters_is_out_of_date(tmp_path, cap
     ],
 )
 def test_a_table_of_other_meshes_or_norms_is_out_of_date_not_corrupt(tmp_path, capsys, block, reason):
-    from signorini.pipeline.cache import quarantine_corrupt, remove_stale
+    from signorini.pipeline.integrity import quarantine_corrupt, remove_stale
 
     (tmp_path / "s").mkdir()
     (tmp_path / "s/errors.csv").write_text(ERRORS)
@@ -427,7 +427,7 @@ def test_a_checksummed_artifact_without_its_checksum_is_damaged(tmp_path, monkey
     both fail their check (the checksum is part of the format, not optional)."""
     import json
 
-    import signorini.pipeline.cache as cache
+    import signorini.pipeline.integrity as cache
     from signorini.pipeline.artifacts import load_npz, save_npz
 
     if kind == "json":
@@ -696,7 +696,7 @@ def test_the_papers_tables_follow_a_changed_mesh_list_without_snakemakes_metadat
 
 
 def test_rendered_tables_of_other_meshes_are_named(tmp_path):
-    from signorini.pipeline.cache import rendered_mismatch
+    from signorini.pipeline.integrity import rendered_mismatch
 
     t1, t2 = tmp_path / "table1.csv", tmp_path / "table2.csv"
     t1.write_text("h,L4\n1/11,1e-3\n1/21,3e-4\n", encoding="utf-8")

@@ -15,8 +15,8 @@ from helpers import PROBLEM, ROOT, clone_built, copy_repo, planned, planned_rule
 from signorini.fem.mesh import mesh_width
 from signorini.paper import PAPER_NORMS
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz, save_json, save_npz
-from signorini.pipeline.cache import artifact_ok, quarantine_corrupt
 from signorini.pipeline.config import ConfigError, check_config
+from signorini.pipeline.integrity import artifact_ok, quarantine_corrupt
 from signorini.pipeline.joblog import job_log
 from signorini.pipeline.paths import FIGURES, PATHS, TARGETS
 from signorini.studies.scene.discretise import discretise_stage

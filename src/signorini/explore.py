@@ -31,7 +31,7 @@ import numpy as np
 from signorini.fem.mesh import DEFAULT_DIAGONAL
 from signorini.fem.problem import Problem
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz
-from signorini.pipeline.cache import artifact_ok
+from signorini.pipeline.integrity import artifact_ok
 from signorini.pipeline.paths import PATHS, REFERENCES
 from signorini.studies.paper.sample import sample_fields
 from signorini.studies.scene.store import SceneMesh, read_errors_csv, read_norm, read_uncertainties

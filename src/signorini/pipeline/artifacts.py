@@ -11,7 +11,7 @@ provenance (``_provenance``): the digest of the code the job ran (its script and
 modules it imports, read at job start), the parameters that define it and the content digest
 (``content_digest``) of every input artifact it read.  The workflow compares the code digest with
 the current code, and the input digests with the current inputs, before planning
-(``signorini.pipeline.cache``); a job refuses an input computed from other inputs than the ones
+(``signorini.pipeline.integrity``); a job refuses an input computed from other inputs than the ones
 now on disk (``signorini.pipeline.joblog``).
 """
 

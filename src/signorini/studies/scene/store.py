@@ -2,9 +2,9 @@
 the norm values and the ``errors.csv``/``eoc.csv`` tables.
 
 Kept apart from the stages that write them, so that a reader (a norm job, a renderer) does not
-run the solver's code.  The CSV contract: ``errors.csv`` has one row per ``N``, columns ``N``,
-``h``, then one column per norm of the scene; ``eoc.csv`` the same columns, one row per ``N``
-after the first and a final ``regression`` row.
+run the solver's code.  The CSV contract (``errors.csv``: one row per ``N``, columns ``N``, ``h``,
+then one column per norm of the scene; ``eoc.csv`` the same columns, one row per ``N`` after the
+first and a final ``regression`` row) is checked in one place, ``pipeline.integrity``.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ import numpy as np
 from signorini.fem.mesh import friedrichs_keller, mesh_width
 from signorini.fem.problem import Problem
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz, npz_provenance
+from signorini.pipeline.integrity import table_defect
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -145,14 +146,10 @@ def read_uncertainties(
 
 
 def read_errors_csv(path: str | os.PathLike) -> pd.DataFrame:
-    """``errors.csv`` (or ``eoc.csv``) as a DataFrame; a truncated or malformed file raises
-    ``CorruptArtifactError``."""
+    """``errors.csv`` (or ``eoc.csv``) as a DataFrame, ``N`` as text; a damaged file (the table
+    contract of ``pipeline.integrity.table_defect``) raises ``CorruptArtifactError``."""
     import pandas as pd
 
-    try:
-        df = pd.read_csv(path, dtype={"N": str}, encoding="utf-8")
-    except (OSError, ValueError) as err:
-        raise CorruptArtifactError(f"{path}: unreadable CSV ({err})") from err
-    if list(df.columns[:2]) != ["N", "h"] or df.empty:
-        raise CorruptArtifactError(f"{path}: expected columns N, h, <norms>, got {list(df.columns)}")
-    return df
+    if (defect := table_defect(path)) is not None:
+        raise CorruptArtifactError(f"{path}: {defect}")
+    return pd.read_csv(path, dtype={"N": str}, encoding="utf-8")

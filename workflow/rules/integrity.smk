@@ -10,7 +10,7 @@
 # check runs at the start of Workflow.execute, where the executor Snakemake chose says whether
 # it is a dry run or --touch (however spelled: -n, --dry-r, -nc2, a profile's dryrun: true);
 # the calls that plan nothing (--lint, -l, --summary, --report, --dag, ...) never get there.
-from signorini.pipeline.cache import (
+from signorini.pipeline.integrity import (
     cached_artifacts,
     quarantine_corrupt,
     remove_leftover_temporaries,

@@ -1,4 +1,5 @@
-"""Checks of the cached artifacts before Snakemake plans a run.
+"""The integrity of the cached artifacts: checks before Snakemake plans a run, and the table
+contract every reader uses.
 
 A cached artifact damaged after it was written (a truncated ``.npz``, an incomplete JSON, a
 cut-off ``errors.csv``, a checksum removed by hand) is moved to ``<name>.corrupt`` by
@@ -18,6 +19,7 @@ import io
 import json
 import math
 import os
+import re
 import sys
 import time
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
@@ -33,30 +35,40 @@ from signorini.pipeline.artifacts import (
     load_npz,
     provenance_of,
 )
+from signorini.pipeline.paths import BENCHMARKS, PATHS, RESULTS
 
 
-def _csv_ok(path: Path) -> bool:
-    """A complete table CSV: ends with a newline, every row has the header's number of
-    fields, no empty cell except ``h`` in the ``regression`` row of ``eoc.csv``, finite numbers
-    (and, in ``errors.csv``, non-negative ones).  Which meshes and norms it holds is not damage
-    but currency (``table_mismatch``)."""
-    text = path.read_text(encoding="utf-8")
+def table_defect(path: str | os.PathLike) -> str | None:
+    """Why a scene table (``errors.csv``, ``eoc.csv``) is damaged, None when it is complete: it ends
+    with a newline, its header starts with ``N, h``, every row has the header's number of fields,
+    no cell is empty except ``h`` in the ``regression`` row of ``eoc.csv`` (its last row), every
+    number is finite (and, in ``errors.csv``, non-negative).  The one check of the table contract,
+    used by the cache check and by every reader (``studies.scene.store.read_errors_csv``); which
+    meshes and norms a table holds is not damage but currency (``table_mismatch``)."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+        rows = list(csv.reader(io.StringIO(text)))
+    except (OSError, UnicodeDecodeError, csv.Error) as err:
+        return f"unreadable ({err})"
     if not text.endswith("\n"):
-        return False
-    rows = list(csv.reader(io.StringIO(text)))
+        return "cut off (no final newline)"
     if len(rows) < 2 or rows[0][:2] != ["N", "h"]:
-        return False
+        return f"expected a header N, h, <norms> and at least one row, got {rows[0] if rows else 'nothing'}"
     for row in rows[1:]:
         if len(row) != len(rows[0]):
-            return False
+            return f"the row {row[:1]} has {len(row)} fields, the header {len(rows[0])}"
         cells = [cell for i, cell in enumerate(row[1:], 1) if not (i == 1 and row[0] == "regression")]
         try:
             values = [float(cell) for cell in cells]
         except ValueError:
-            return False
+            return f"the row {row[:1]} holds a cell that is not a number"
         if not all(math.isfinite(v) and (v >= 0.0 or path.name != "errors.csv") for v in values):
-            return False
-    return path.name != "eoc.csv" or rows[-1][0] == "regression"
+            sign = " and non-negative" if path.name == "errors.csv" else ""
+            return f"the row {row[:1]} holds a value that is not finite{sign}"
+    if path.name == "eoc.csv" and rows[-1][0] != "regression":
+        return "its last row is not the regression row"
+    return None
 
 
 @dataclass(frozen=True)
@@ -172,7 +184,7 @@ def artifact_ok(path: str | os.PathLike) -> bool:
         elif path.suffix == ".json":
             load_json(path)
         elif path.suffix == ".csv":
-            return _csv_ok(path)
+            return table_defect(path) is None
         elif path.suffix == ".tsv":
             return _benchmark_ok(path)
     except (CorruptArtifactError, OSError, UnicodeDecodeError, csv.Error):
@@ -332,21 +344,30 @@ def quarantine_corrupt(paths: Iterable[str | os.PathLike]) -> list[str]:
     return moved
 
 
+# the artifacts the cache check reads: every path of the scene chain and the studies that is an
+# archive or a JSON record (their checksums), the two scene tables (their contract and shape) and
+# the benchmark files of the computing rules
+CHECKED_PATHS = tuple(key for key, template in PATHS.items() if template.endswith((".npz", ".json")))
+TABLE_PATHS = ("errors_csv", "eoc_csv")
+
+
+def _pattern(template: str, scene: str) -> str:
+    """A path template of ``paths`` as a glob under the results directory, for one scene (every
+    other wildcard matches anything)."""
+    relative = Path(template).relative_to(RESULTS).as_posix().replace("{scene}", scene)
+    return re.sub(r"\{[^}]*\}", "*", relative)
+
+
 def cached_artifacts(root: str | os.PathLike, scenes: Mapping[str, Mapping]) -> Iterator[Path | tuple]:
-    """The checkable cached artifacts (``.npz``, ``.json``, ``errors.csv``, ``eoc.csv``, benchmark
-    ``.tsv``) of the given scenes under ``root`` (the results directory), atlas cases included;
-    the two tables come with what they must hold (``expected_shape``)."""
+    """The checkable cached artifacts of the given scenes under ``root`` (the results directory),
+    from the path templates of ``signorini.pipeline.paths`` (``CHECKED_PATHS``, the tables of
+    ``TABLE_PATHS`` with what they must hold (``expected_shape``), the benchmark files)."""
+    root = Path(root)
     for scene, block in scenes.items():
-        base = Path(root) / scene
-        yield from base.glob("*.npz")
-        for table in (base / "errors.csv", base / "eoc.csv"):
+        for key in CHECKED_PATHS:
+            yield from sorted(root.glob(_pattern(PATHS[key], scene)))
+        for key in TABLE_PATHS:
+            table = root / _pattern(PATHS[key], scene)
             yield table, expected_shape(table, block)
-        yield from base.glob("N*/system.*")
-        yield from base.glob("N*/solution.*")
-        yield from base.glob("N*/norms/*.json")
-        yield from base.glob("N*/theory.json")
-        yield from base.glob("N*/work_precision/*.json")
-        yield from base.glob("benchmarks/**/*.tsv")
-        if "atlas" in block:
-            yield from base.glob("atlas/*.json")
-            yield from base.glob("atlas/*.npz")
+        for template in BENCHMARKS.values():
+            yield from sorted(root.glob(_pattern(template, scene)))
