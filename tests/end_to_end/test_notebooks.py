@@ -21,12 +21,11 @@ from pathlib import Path
 import jupytext
 import numpy as np
 import pytest
-from helpers import clone_built
+from helpers import ROOT, clone_built
 from nbclient import NotebookClient
 
 from signorini import explore
 
-ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.py"))
 KERNEL = "signorini-notebook-test"
 TIMEOUT_PER_CELL = 180

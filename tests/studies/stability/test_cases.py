@@ -8,12 +8,12 @@ import csv
 import json
 import os
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
 import yaml
+from helpers import ROOT
 
 from signorini.fem.discrete import build
 from signorini.fem.norms import evaluate_norms
@@ -31,7 +31,6 @@ from signorini.solvers.linalg import is_positive_definite
 from signorini.studies.stability import atlas as stab_atlas
 from signorini.studies.stability import cases as stab_cases
 
-ROOT = Path(__file__).resolve().parents[1]
 AMPLITUDES = [1e-12, 1e-6, 1.0, 1e6, 1e12]
 NORMS = ["L4", "Linf", "W14", "W1inf", "H12"]
 
