@@ -21,11 +21,14 @@ import time  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 import yaml  # noqa: E402
-from helpers import PROBLEM, TEST_PEER_PYTHON, copy_repo, snakemake  # noqa: E402
+from helpers import BUILT_TARGETS, PROBLEM, SHIPPED_SCENES, TEST_SCENES, copy_repo, snakemake  # noqa: E402
 
 from signorini.fem.discrete import build  # noqa: E402
 from signorini.fem.problem import Problem  # noqa: E402
 from signorini.fem.solve import solve_discrete  # noqa: E402
+from signorini.studies.scene.discretise import discretise_stage  # noqa: E402
+from signorini.studies.scene.solve import solve_stage  # noqa: E402
+from signorini.studies.scene.store import SceneMesh  # noqa: E402
 
 # (problem parameters, N, diagonal): the small meshes every solver test uses.  The
 # free points are chosen so that no boundary vertex coincides with (x0, 0).
@@ -76,92 +79,17 @@ def rng() -> np.random.Generator:
     return np.random.default_rng(20240607)
 
 
+@pytest.fixture(scope="module")
+def solved(tmp_path_factory):
+    """The default problem discretised and solved on N = 8 by the scene's stages: (directory, mesh)."""
+    d = tmp_path_factory.mktemp("faults")
+    at = SceneMesh(PROBLEM, 8, "sw_ne")
+    discretise_stage(at, d / "system.npz", d / "system.json")
+    solve_stage(at, d / "system.npz", "active_set", d / "solution.npz", d / "solution.json")
+    return d, at
+
+
 # --- the workflow, built once ---------------------------------------------------------------
-
-# Small versions of the studies beyond the paper (what `tests/test_theory.py`,
-# `test_work_precision.py` and `test_stability.py` check end to end), next to the smoke scene
-# and a scene added by the user.  They replace the shipped scenes in the built copy.
-TEST_SCENES = {
-    "mine": {"N": [8, 16], "norms": ["L2", "H1"], "solver": "active_set", "problem": PROBLEM},
-    "theory": {
-        "N": [9, 17, 33],
-        "norms": ["L2", "L4", "L8", "Linf", "W12", "W14", "W1inf", "H1", "H12", "L4plus", "L4minus", "L4_true",
-                  "W1inf_true"],
-        "solver": "active_set",
-        "problem": PROBLEM,
-    },
-    "work_precision": {
-        "N": [11, 21],
-        "norms": ["L4", "W14"],
-        "solver": "active_set",
-        "problem": PROBLEM,
-        "study": {
-            "source": "smoke",
-            "tolerances": [1e-2, 1e-8],
-            "time_limit_s": 30,
-            "figure_N": [11, 21],
-            # the timing protocol without waiting for a quiet machine (the test machine is shared)
-            "timing": {"wait_s": 0, "retries": 0, "min_repeats": 1, "budget_s": 1},
-            "same_warm_start": True,
-            "configs": {
-                "active_set": {"solver": "active_set", "label": "active set"},
-                "active_set_cold": {
-                    "solver": "active_set",
-                    "label": "active set (cold)",
-                    "options": {"warm_start": None},
-                },
-                # a PETSc peer: certified rows with petsc4py under /usr/bin/python3, skipped rows without
-                "petsc_tron": {
-                    "solver": "petsc_tao",
-                    "label": "TAO TRON",
-                    "options": {"tao_type": "tron", "pc_type": "cholesky", "pc_factor_mat_solver_type": "cholmod"},
-                },
-            },
-            "qp_solvers": ["OSQP"],
-            "peer_python": TEST_PEER_PYTHON,
-        },
-    },
-    "stability": {
-        "N": [9],
-        "norms": ["L4", "L16", "Linf", "W14", "W116", "W1inf", "H12"],
-        "solver": "active_set",
-        "problem": PROBLEM,
-        "atlas": {
-            "timeout_s": 60,
-            "solvers": {
-                "active_set": {"solver": "active_set"},
-                "osqp": {"solver": "cvxpy_osqp", "options": {"normalize": True, "tol": 1e-8, "time_limit": 60}},
-                "osqp_raw": {"solver": "cvxpy_osqp", "options": {"tol": 1e-8, "time_limit": 60}},
-            },
-            "default_solvers": ["active_set", "osqp", "osqp_raw"],
-            "cases": [
-                {"name": "A_1e-9", "group": "scaling", "N": 9, "problem": {"A": 1e-9}, "reference": "A_1"},
-                {"name": "A_1", "group": "scaling", "N": 9, "problem": {"A": 1.0}},
-                {"name": "c_1e-06", "group": "reaction", "N": 9, "problem": {"c": 1e-6}},
-                {"name": "c_1e+06", "group": "reaction", "N": 9, "problem": {"c": 1e6}},
-                {"name": "N2", "group": "mesh", "N": 2, "solvers": ["active_set", "osqp"]},
-                {"name": "jitter", "group": "mesh", "N": 9, "jitter": 0.2, "solvers": ["active_set"]},
-                {"name": "f_zero", "group": "degenerate", "N": 9, "problem": {"A": 0.0}},
-                {"name": "bad_spd", "group": "bad_input", "N": 9, "corrupt": "non_spd", "solvers": ["active_set"]},
-            ],
-        },
-    },
-}
-# shipped scenes the built copy keeps as they are: the second manufactured case is tested as shipped
-SHIPPED_SCENES = ("paper", "smoke", "case2")
-# every target of the built copy: the paper's outputs and true norms from the smoke scene, the three
-# studies, the second case
-BUILT_TARGETS = (
-    "all",
-    "theory",
-    "work_precision",
-    "stability",
-    "results/mine/errors.csv",
-    "results/mine/eoc.csv",
-    "results/case2/eoc.csv",
-    "true_norms",
-)
-
 
 @pytest.fixture(scope="session")
 def built_repo(tmp_path_factory):

@@ -1,4 +1,6 @@
-"""Helpers of the workflow tests: repository copies, Snakemake runs and dry-run parsing.
+"""Helpers of the tests (imported as ``from helpers import ...``): repository copies, Snakemake
+runs and dry-run parsing, the test workflow's scenes, and the comparisons and small data that
+test modules of several source modules share.
 
 Workflow runs happen in a temporary copy of the repository (Snakefile, workflow/, src/), so
 the real tree and its results/ cache are never touched.
@@ -13,6 +15,15 @@ import subprocess
 import sys
 from pathlib import Path
 
+import meshio
+import numpy as np
+import yaml
+
+from signorini.paper import PAPER_NORMS
+from signorini.pipeline.paths import PEER_DRIVER
+from signorini.studies.scene.discretise import discretise_stage
+from signorini.studies.scene.solve import solve_stage
+from signorini.studies.scene.store import SceneMesh
 from signorini.studies.work_precision.study import PEER_PYTHON
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -21,6 +32,12 @@ PROBLEM = {"x0": 0.5, "R": 0.45, "A": 10, "c": 1}
 # the PETSc peers' interpreter of the tests (default: the study's, /usr/bin/python3); .ci/run sets
 # one without numpy for a second pass, so that the "skipped, with the reason" route is tested too
 TEST_PEER_PYTHON = os.environ.get("SIGNORINI_TEST_PEER_PYTHON") or PEER_PYTHON
+PEER_DRIVER_FILE = ROOT / PEER_DRIVER
+# the paper's norms, and the smoke scene's meshes in the shipped config
+NORMS = list(PAPER_NORMS)
+SMOKE_N = [11, 21, 41]
+# an errors.csv of three meshes and one norm
+ERRORS = "N,h,L4\n11,0.0909,0.04\n21,0.0476,0.012\n41,0.0244,0.0035\n"
 
 
 def copy_repo(dest: Path) -> Path:
@@ -89,3 +106,135 @@ def dry_run_jobs(text: str) -> list[dict]:
 
 def job_key(job: dict) -> tuple[str, tuple]:
     return job["rule"], tuple(sorted(job["wildcards"].items()))
+
+
+# --- the test workflow (``conftest.built_repo``) -----------------------------------------------
+
+# Small versions of the studies beyond the paper (what `tests/end_to_end/test_studies.py` and
+# `tests/studies/work_precision/test_measure.py` check end to end), next to the smoke scene and a
+# scene added by the user.  They replace the shipped scenes in the built copy.
+TEST_SCENES = {
+    "mine": {"N": [8, 16], "norms": ["L2", "H1"], "solver": "active_set", "problem": PROBLEM},
+    "theory": {
+        "N": [9, 17, 33],
+        "norms": ["L2", "L4", "L8", "Linf", "W12", "W14", "W1inf", "H1", "H12", "L4plus", "L4minus", "L4_true",
+                  "W1inf_true"],
+        "solver": "active_set",
+        "problem": PROBLEM,
+    },
+    "work_precision": {
+        "N": [11, 21],
+        "norms": ["L4", "W14"],
+        "solver": "active_set",
+        "problem": PROBLEM,
+        "study": {
+            "source": "smoke",
+            "tolerances": [1e-2, 1e-8],
+            "time_limit_s": 30,
+            "figure_N": [11, 21],
+            # the timing protocol without waiting for a quiet machine (the test machine is shared)
+            "timing": {"wait_s": 0, "retries": 0, "min_repeats": 1, "budget_s": 1},
+            "same_warm_start": True,
+            "configs": {
+                "active_set": {"solver": "active_set", "label": "active set"},
+                "active_set_cold": {
+                    "solver": "active_set",
+                    "label": "active set (cold)",
+                    "options": {"warm_start": None},
+                },
+                # a PETSc peer: certified rows with petsc4py under /usr/bin/python3, skipped rows without
+                "petsc_tron": {
+                    "solver": "petsc_tao",
+                    "label": "TAO TRON",
+                    "options": {"tao_type": "tron", "pc_type": "cholesky", "pc_factor_mat_solver_type": "cholmod"},
+                },
+            },
+            "qp_solvers": ["OSQP"],
+            "peer_python": TEST_PEER_PYTHON,
+        },
+    },
+    "stability": {
+        "N": [9],
+        "norms": ["L4", "L16", "Linf", "W14", "W116", "W1inf", "H12"],
+        "solver": "active_set",
+        "problem": PROBLEM,
+        "atlas": {
+            "timeout_s": 60,
+            "solvers": {
+                "active_set": {"solver": "active_set"},
+                "osqp": {"solver": "cvxpy_osqp", "options": {"normalize": True, "tol": 1e-8, "time_limit": 60}},
+                "osqp_raw": {"solver": "cvxpy_osqp", "options": {"tol": 1e-8, "time_limit": 60}},
+            },
+            "default_solvers": ["active_set", "osqp", "osqp_raw"],
+            "cases": [
+                {"name": "A_1e-9", "group": "scaling", "N": 9, "problem": {"A": 1e-9}, "reference": "A_1"},
+                {"name": "A_1", "group": "scaling", "N": 9, "problem": {"A": 1.0}},
+                {"name": "c_1e-06", "group": "reaction", "N": 9, "problem": {"c": 1e-6}},
+                {"name": "c_1e+06", "group": "reaction", "N": 9, "problem": {"c": 1e6}},
+                {"name": "N2", "group": "mesh", "N": 2, "solvers": ["active_set", "osqp"]},
+                {"name": "jitter", "group": "mesh", "N": 9, "jitter": 0.2, "solvers": ["active_set"]},
+                {"name": "f_zero", "group": "degenerate", "N": 9, "problem": {"A": 0.0}},
+                {"name": "bad_spd", "group": "bad_input", "N": 9, "corrupt": "non_spd", "solvers": ["active_set"]},
+            ],
+        },
+    },
+}
+# shipped scenes the built copy keeps as they are: the second manufactured case is tested as shipped
+SHIPPED_SCENES = ("paper", "smoke", "case2")
+# every target of the built copy: the paper's outputs and true norms from the smoke scene, the three
+# studies, the second case
+BUILT_TARGETS = (
+    "all",
+    "theory",
+    "work_precision",
+    "stability",
+    "results/mine/errors.csv",
+    "results/mine/eoc.csv",
+    "results/case2/eoc.csv",
+    "true_norms",
+)
+
+
+# --- the scene's stages and artifacts -------------------------------------------------------------
+
+
+def solve_chain(d, N: int, npz="solution.npz", json="solution.json") -> None:
+    """discretise + solve of the default problem on mesh N into directory d."""
+    discretise_stage(SceneMesh(PROBLEM, N, "sw_ne"), d / f"system{N}.npz", d / f"system{N}.json")
+    solve_stage(SceneMesh(PROBLEM, N, "sw_ne"), d / f"system{N}.npz", "active_set", d / npz, d / json)
+
+
+def read_vtu(path) -> dict[str, np.ndarray]:
+    """The nodal fields of a .vtu file read back by meshio, with ``Points`` and the triangles."""
+    mesh = meshio.read(path)
+    assert [block.type for block in mesh.cells] == ["triangle"]
+    return {**mesh.point_data, "Points": mesh.points, "triangles": mesh.cells[0].data}
+
+
+def smoke_config(N: list[int]) -> dict:
+    """The shipped config's smoke scene alone, on the meshes ``N``, rendered by the paper's outputs."""
+    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    return {"figures_scene": "smoke", "scenes": {"smoke": {**config["scenes"]["smoke"], "N": N}}}
+
+
+# --- comparisons -----------------------------------------------------------------------------------
+
+
+def same_bits(x: np.ndarray, y: np.ndarray) -> bool:
+    return x.dtype == y.dtype and x.shape == y.shape and np.array_equal(x.view(np.uint8), y.view(np.uint8))
+
+
+def rel_max_diff(u: np.ndarray, v: np.ndarray) -> float:
+    return float(np.abs(u - v).max() / np.abs(v).max())
+
+
+def check_kkt_independently(A, b, B, u, lam, tol=1e-10):
+    """The KKT conditions recomputed here, not through ``kkt_certificate``."""
+    r = A @ u - b
+    scale = max(np.abs(A @ u).max(), np.abs(b).max())
+    free = np.setdiff1d(np.arange(b.size), B)
+    assert np.abs(r[free]).max() <= tol * scale, "stationarity at free nodes"
+    assert np.abs(r[B] - lam).max() <= tol * scale, "λ = (A u − b)_B"
+    assert u[B].min() >= -tol * np.abs(u).max(), "u_B ≥ 0"
+    assert lam.min() >= -tol * scale, "λ ≥ 0"
+    assert np.abs(u[B] * lam).max() <= tol * np.abs(u).max() * scale, "complementarity"

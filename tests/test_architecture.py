@@ -1,32 +1,20 @@
-"""The architecture: the layers' import boundaries, the code dependencies derived from the
-imports (``signorini.pipeline.codedeps``), and what an edit of each module re-runs.
-
-The edit matrix appends a comment to each module under ``src/signorini/`` in turn, in a copy
-of the built repository (``conftest.built_repo``), and checks with a dry run that exactly the
-jobs whose stage imports the module (directly or indirectly), and the jobs downstream of
-them, are planned.  The dry runs happen in one interpreter (``snakemake.cli.main`` called in
-a loop), so the matrix costs a fraction of a second per module.
-"""
+"""The architecture: the layers' import boundaries, no import cycles, package inits that import
+nothing, no function over 80 lines, text I/O that names its encoding, and the tests' layout (every
+module of ``src/`` has its test module where docs/architecture.md says)."""
 
 from __future__ import annotations
 
 import ast
-import json
-import os
-import subprocess
-import sys
-import textwrap
+import re
 from pathlib import Path
 
 import pytest
-from conftest import BUILT_TARGETS
-from helpers import ROOT, clone_built, dry_run_jobs, job_key
+from helpers import ROOT
 
-from signorini.pipeline.codedeps import ImportCache, _imports, _module_file, _module_name, import_closure
+from signorini.pipeline.codedeps import _imports, _module_file, _module_name
 
 SRC = ROOT / "src"
 PACKAGE = SRC / "signorini"
-AGGREGATES = {"all", "theory", "work_precision", "stability", "true_norms"}  # target rules without a script
 
 
 # --- layers ------------------------------------------------------------------------------------
@@ -148,231 +136,63 @@ def test_no_function_longer_than_80_lines():
     assert not long, long
 
 
-# --- the import closure --------------------------------------------------------------------------
+# --- text I/O names its encoding ------------------------------------------------------------------
+
+# calls that read or write text and take an ``encoding`` (open and Path.open unless binary, pathlib,
+# pandas, logging, io, subprocess with text=True)
+_TEXT_CALLS = {"read_text", "write_text", "read_csv", "to_csv", "read_table", "read_json", "to_json"}
+_TEXT_CALLS |= {"FileHandler", "TextIOWrapper"}
 
 
-def test_import_closure_follows_every_kind_of_import(tmp_path):
-    src = tmp_path / "src"
-    files = {
-        "signorini/__init__.py": "",
-        "signorini/a/__init__.py": "",
-        "signorini/a/top.py": "from signorini.a import lazy_user\nimport signorini.b.deep as d\n",
-        "signorini/a/lazy_user.py": "def f():\n    from . import sibling\n",
-        "signorini/a/sibling.py": "from ..c import thing\n",
-        "signorini/b/__init__.py": "",
-        "signorini/b/deep.py": "from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    import signorini.never\n",
-        "signorini/c.py": "thing = 1\n",
-        "signorini/never.py": "",
-        "signorini/unused.py": "",
-    }
-    for rel, text in files.items():
-        (src / rel).parent.mkdir(parents=True, exist_ok=True)
-        (src / rel).write_text(text)
-    script = tmp_path / "script.py"
-    script.write_text("import numpy\nfrom signorini.a.top import x\n")
-    found = {p.relative_to(src).as_posix() for p in import_closure(script, src)}
-    assert found == {
-        "signorini/__init__.py",
-        "signorini/a/__init__.py",
-        "signorini/a/top.py",
-        "signorini/a/lazy_user.py",  # ``from package import module``
-        "signorini/a/sibling.py",  # relative import inside a function
-        "signorini/b/__init__.py",
-        "signorini/b/deep.py",  # ``import a.b as c``
-        "signorini/c.py",  # ``from ..c import name``
-    }
+def _mode(call, index: int):
+    for kw in call.keywords:
+        if kw.arg == "mode":
+            return kw.value.value if isinstance(kw.value, ast.Constant) else None
+    if len(call.args) > index:
+        return call.args[index].value if isinstance(call.args[index], ast.Constant) else None
+    return "r"
 
 
-def test_the_import_cache_holds_only_while_a_file_is_unchanged(tmp_path):
-    """Direct imports come from the cache file in another process, until the file's content changes
-    (even with its size and modification time kept)."""
-    src = tmp_path / "src"
-    (src / "signorini").mkdir(parents=True)
-    for name, text in {"__init__.py": "", "a.py": "", "b.py": "", "c.py": ""}.items():
-        (src / "signorini" / name).write_text(text)
-    script, cache_file = tmp_path / "script.py", tmp_path / "cache/imports.json"
-    script.write_text("from signorini import a\n")
-
-    def closure() -> set[str]:
-        cache = ImportCache(cache_file)  # a new process
-        found = {p.name for p in import_closure(script, src, cache)}
-        cache.save()
-        assert found == {p.name for p in import_closure(script, src)}  # the same as without a cache
-        return found
-
-    assert closure() == {"__init__.py", "a.py"}
-    entries = json.loads(cache_file.read_text())
-    assert len(entries) == 3  # the script, signorini/__init__.py, a.py
-    (src / "signorini/a.py").write_text("from signorini import b\n")  # a new import, new size
-    assert closure() == {"__init__.py", "a.py", "b.py"}
-    stat = (src / "signorini/a.py").stat()
-    (src / "signorini/a.py").write_text("from signorini import c\n")  # same size, same time
-    os.utime(src / "signorini/a.py", ns=(stat.st_atime_ns, stat.st_mtime_ns))
-    assert closure() == {"__init__.py", "a.py", "c.py"}
-    cache_file.write_text("{truncated")  # a damaged cache is an empty one
-    assert closure() == {"__init__.py", "a.py", "c.py"}
-    assert json.loads(cache_file.read_text())
+def unnamed_encodings(source: str) -> list[tuple[int, str]]:
+    """(line, call) of every text I/O call in ``source`` that does not name its encoding."""
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if not isinstance(node, ast.Call) or {kw.arg for kw in node.keywords} & {"encoding", None}:
+            continue
+        func = node.func
+        name = func.attr if isinstance(func, ast.Attribute) else getattr(func, "id", None)
+        owner = getattr(func.value, "id", None) if isinstance(func, ast.Attribute) else None
+        if name in ("open", "fdopen"):  # open(path, mode), os.fdopen(fd, mode), Path.open(mode)
+            index = 0 if isinstance(func, ast.Attribute) and owner not in ("os", "io") else 1
+            mode = _mode(node, index)
+            bad = mode is None or "b" not in mode
+        elif name == "to_csv":  # with no target it returns the text: no encoding involved
+            bad = bool(node.args) or any(kw.arg == "path_or_buf" for kw in node.keywords)
+        elif name in ("run", "Popen", "check_output", "check_call", "call") and owner == "subprocess":
+            bad = any(kw.arg in ("text", "universal_newlines") for kw in node.keywords)
+        else:
+            bad = name in _TEXT_CALLS
+        if bad:
+            found.append((node.lineno, ast.unparse(node)[:120]))
+    return found
 
 
-def test_every_rule_with_a_script_lists_its_closure(tmp_path):
-    """The Snakefile lists the closure as a rule's code input: the solve job of a dry run."""
-    from helpers import copy_repo, snakemake
-
-    copy_repo(tmp_path)
-    text = snakemake(tmp_path, "-n", "--forceall", "results/smoke/N11/solution.npz").stdout
-    (solve,) = [job for job in dry_run_jobs(text) if job["rule"] == "solve"]
-    listed = {p for p in solve["input"] if p.startswith(("src/", "workflow/scripts/"))}
-    closure = import_closure(tmp_path / "workflow/scripts/solve.py", tmp_path / "src")
-    assert listed == {"workflow/scripts/solve.py"} | {p.relative_to(tmp_path).as_posix() for p in closure}
-    assert "src/signorini/solvers/active_set.py" in listed and "src/signorini/fem/norms.py" not in listed
-
-
-# --- the edit matrix ---------------------------------------------------------------------------
-
-DRIVER = textwrap.dedent(
-    r"""
-    import contextlib, io, json, os, sys, time
-    from pathlib import Path
-    from snakemake.cli import main
-
-    def dry(args):
-        sys.argv = ["snakemake", "-n", *args]  # what the Snakefile sees (a dry run: read-only)
-        buf = io.StringIO()
-        with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(buf):
-            try:
-                main(["-n", *args])
-            except SystemExit as exit:
-                if exit.code:
-                    raise RuntimeError(buf.getvalue()[-3000:])
-        return buf.getvalue()
-
-    targets, modules = json.loads(sys.argv[1]), json.loads(sys.argv[2])
-    out = {"": dry(["--forceall", *targets]), "unchanged": dry(targets)}
-    for rel in modules:
-        path = Path(rel)
-        text, st = path.read_text(), path.stat()
-        try:
-            path.write_text(text + "\n# an edit\n")
-            future = time.time() + 5
-            os.utime(path, (future, future))
-            out[rel] = dry(targets)
-        finally:
-            path.write_text(text)
-            os.utime(path, ns=(st.st_atime_ns, st.st_mtime_ns))
-    print(json.dumps(out))
-    """
-)
-
-
-@pytest.fixture(scope="module")
-def edit_matrix(built_repo, tmp_path_factory):
-    """{module: planned jobs after its edit}, the whole DAG (``""``) and the repository copy."""
-    repo = clone_built(built_repo, tmp_path_factory.mktemp("matrix"))
-    modules = sorted(p.relative_to(repo).as_posix() for p in (repo / "src/signorini").rglob("*.py"))
-    proc = subprocess.run(
-        [sys.executable, "-c", DRIVER, json.dumps(BUILT_TARGETS), json.dumps(modules)],
-        cwd=repo,
-        capture_output=True,
-        text=True,
-        timeout=900,
+def test_the_encoding_check_finds_what_it_should():
+    source = (
+        "open(p)\nopen(p, 'w')\nopen(p, 'rb')\nPath(p).open()\nPath(p).open('wb')\np.read_text()\n"
+        "p.write_text(s, encoding='utf-8')\nos.fdopen(fd, 'w')\nos.fdopen(fd, 'wb')\npd.read_csv(p)\n"
+        "df.to_csv()\ndf.to_csv(p)\nsubprocess.run(c, text=True)\nsubprocess.run(c)\nlogging.FileHandler(p)\n"
     )
-    assert proc.returncode == 0, proc.stderr[-5000:]
-    runs = json.loads(proc.stdout.strip().splitlines()[-1])
-    return repo, {key: dry_run_jobs(text) for key, text in runs.items()}
+    assert [line for line, _ in unnamed_encodings(source)] == [1, 2, 4, 6, 8, 10, 12, 13, 15]
 
 
-def expected_after_edit(repo: Path, dag: list[dict], module: str) -> set:
-    """The jobs whose script imports ``module`` (directly or not), and every job downstream."""
-    code = {}
-    for rule in {job["rule"] for job in dag} - AGGREGATES:
-        script = repo / "workflow/scripts" / f"{rule}.py"
-        code[rule] = {p.relative_to(repo).as_posix() for p in import_closure(script, repo / "src")}
-    producer = {path: job_key(job) for job in dag for path in job["output"]}
-    parents = {job_key(job): {producer[p] for p in job["input"] if p in producer} for job in dag}
-    rerun = {job_key(job) for job in dag if module in code.get(job["rule"], ())}
-    changed = True
-    while changed:
-        grown = rerun | {key for key, ups in parents.items() if ups & rerun}
-        changed, rerun = grown != rerun, grown
-    return rerun
-
-
-@pytest.mark.slow
-def test_edit_matrix_plans_exactly_the_importing_jobs(edit_matrix):
-    repo, runs = edit_matrix
-    dag = runs[""]
-    assert runs["unchanged"] == [], "the built copy is not up to date"
-    wrong = {}
-    for module, jobs in runs.items():
-        if module in ("", "unchanged"):
-            continue
-        got, want = {job_key(job) for job in jobs}, expected_after_edit(repo, dag, module)
-        if got != want:
-            wrong[module] = {"unexpected": sorted(got - want)[:5], "missing": sorted(want - got)[:5]}
-    assert not wrong, json.dumps(wrong, indent=1)
-
-
-def rules_after(runs: dict, module: str) -> set[str]:
-    return {job["rule"] for job in runs[f"src/signorini/{module}"]} - AGGREGATES
-
-
-@pytest.mark.slow
-def test_edits_rerun_what_the_design_promises(edit_matrix):
-    _, runs = edit_matrix
-    figures = {"figure2", "figure3", "theory_report", "work_precision_figures", "stability_atlas"}
-    assert rules_after(runs, "plotting.py") == figures  # every figure of every study, nothing else
-    assert rules_after(runs, "studies/paper/runtime.py") == {"runtime"}  # no solve, no norm
-    paper = {"discretise", "solve", "norm", "errors", "eoc", "sample", "table1", "table2", "figure2", "figure3",
-             "reproduction", "runtime"}
-    for renderer in ("report.py", "findings.py", "figures.py", "table.py"):
-        rules = rules_after(runs, f"studies/work_precision/{renderer}")
-        assert rules and rules <= {"work_precision_table", "work_precision_figures", "work_precision_report"}
-        assert not rules & paper
-    assert rules_after(runs, "studies/paper/tables.py") == {"table1", "table2", "reproduction"}
-    norms = rules_after(runs, "fem/norms.py")
-    assert "norm" in norms and not norms & {"discretise", "solve", "sample", "figure2"}
-    solver = rules_after(runs, "solvers/active_set.py")
-    assert {"solve", "norm", "errors", "eoc", "table1", "runtime"} <= solver and "discretise" not in solver
-
-
-@pytest.mark.slow
-def test_jobs_ran_only_modules_they_declare(edit_matrix):
-    """Soundness of the static closure: the package modules each job of the built copy really
-    loaded (the last line of its log) are among the rule's code inputs."""
-    repo, runs = edit_matrix
-    checked = 0
-    for job in runs[""]:
-        if job["rule"] in AGGREGATES or not job["log"]:
-            continue
-        lines = [ln for ln in (repo / job["log"][0]).read_text().splitlines() if "modules run:" in ln]
-        assert lines, f"{job['log'][0]}: no modules line"
-        loaded = lines[-1].split("modules run: ", 1)[1].split()
-        script = repo / "workflow/scripts" / f"{job['rule']}.py"
-        declared = {
-            ".".join(p.relative_to(repo / "src").with_suffix("").parts).removesuffix(".__init__")
-            for p in import_closure(script, repo / "src")
-        }
-        assert set(loaded) <= declared, f"{job['rule']} ran undeclared {sorted(set(loaded) - declared)}"
-        checked += 1
-    assert checked > 50
-
-
-def test_the_package_version_is_the_project_version():
-    import tomllib
-
-    import signorini
-
-    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
-    assert signorini.__version__ == project["version"]
-
-
-def test_citation_names_this_version_and_the_paper():
-    import yaml
-
-    import signorini
-
-    cff = yaml.safe_load((ROOT / "CITATION.cff").read_text())
-    assert cff["cff-version"] == "1.2.0" and str(cff["version"]) == signorini.__version__
-    (paper,) = cff["references"]
-    assert paper["doi"].startswith("10.1007/s00211") and paper["journal"] == "Numerische Mathematik"
-    assert cff["license"] in (ROOT / "LICENSE").read_text().replace("BSD 3-Clause", "BSD-3-Clause")
+def test_no_text_io_call_leaves_its_encoding_to_the_locale():
+    """Every file of src/, workflow/ (scripts, peers, the Snakefile's rules), benchmarks/ and
+    notebooks/ names the encoding of every text it reads or writes."""
+    files = [p for d in ("src", "workflow", "benchmarks", "notebooks") for p in sorted((ROOT / d).rglob("*.py"))]
+    found = [f"{p.relative_to(ROOT)}:{line}: {call}" for p in files for line, call in unnamed_encodings(p.read_text())]
+    # the Snakefile and the rule files are not Python: no call of these kinds at all there
+    rules = [ROOT / "Snakefile", *sorted((ROOT / "workflow/rules").glob("*.smk"))]
+    pattern = re.compile(r"\b(open|read_text|write_text|read_csv|to_csv)\(")
+    found += [f"{p.relative_to(ROOT)}: {m.group(0)}" for p in rules for m in pattern.finditer(p.read_text())]
+    assert not found, "\n".join(found)

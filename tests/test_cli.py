@@ -1,29 +1,20 @@
-"""The command line (``python -m signorini solve``) and the ParaView export (``.vtu``, also the
-workflow's opt-in ``vtk`` rule)."""
+"""The command line (``python -m signorini solve``, ``signorini.cli``): the certificate, the norms and
+the ParaView export it writes, and the arguments it refuses as the config check does."""
 
 from __future__ import annotations
 
 import subprocess
 import sys
 
-import meshio
 import numpy as np
 import pytest
-from helpers import clone_built, planned, snakemake
+from helpers import read_vtu
 
 from signorini.fem.discrete import build
-from signorini.fem.mesh import boundary_nodes, friedrichs_keller
+from signorini.fem.mesh import boundary_nodes
 from signorini.fem.norms import evaluate_norms
 from signorini.fem.problem import Problem
 from signorini.fem.solve import solve_discrete
-from signorini.pipeline.artifacts import load_npz
-
-
-def read_vtu(path) -> dict[str, np.ndarray]:
-    """The nodal fields of a .vtu file read back by meshio, with ``Points`` and the triangles."""
-    mesh = meshio.read(path)
-    assert [block.type for block in mesh.cells] == ["triangle"]
-    return {**mesh.point_data, "Points": mesh.points, "triangles": mesh.cells[0].data}
 
 
 def test_solve_command_prints_certificate_norms_and_writes_vtu(tmp_path):
@@ -138,16 +129,3 @@ def test_the_cli_and_the_config_check_give_the_same_message(capsys, no_mesh):
 def test_a_non_finite_norm_is_an_error(capsys):
     code, out, err = run_cli(capsys, "--N", "8", "--norms", "L4,L99999")
     assert code == 1 and "L99999 = inf is not a finite number" in err, (out, err)
-
-
-@pytest.mark.slow
-def test_vtk_rule_writes_a_scene_solution(built_repo, tmp_path):
-    repo = clone_built(built_repo, tmp_path / "repo")
-    target = "results/smoke/N21/solution.vtu"
-    assert [rule for rule, _ in planned(snakemake(repo, "-n", target))] == ["vtk"]  # from the cached solution
-    snakemake(repo, "-c1", target)
-    data = read_vtu(repo / target)
-    solution = load_npz(repo / "results/smoke/N21/solution.npz")
-    np.testing.assert_array_equal(data["u_h"], solution["u"])
-    mesh = friedrichs_keller(21)
-    np.testing.assert_array_equal(data["lambda"][boundary_nodes(mesh)], solution["lam"])

@@ -94,7 +94,7 @@ def _references(page: Path) -> list[tuple[str, str]]:
         if "::" in span and span.startswith("tests/"):
             refs.append(("test", span))
         elif re.fullmatch(r"test_\w+", span):  # a test named without its file
-            refs.append(("test", f"tests/*.py::{span}"))
+            refs.append(("test", f"tests/**/*.py::{span}"))
         elif (name := _python_name(span)) is not None:
             refs.append(("python", name))
         elif _is_path(span) and not span.startswith(GENERATED):

@@ -120,14 +120,3 @@ def test_a_target_after_configfile_is_recognised(tmp_path, monkeypatch):
     monkeypatch.setattr("sys.argv", ["snakemake", "--configfile", "my.yaml", "all"])
     h.emit(record("FileNotFoundError: [Errno 2] No such file or directory: 'all'", level=logging.ERROR))
     assert out.getvalue().startswith("--configfile: 'all' is not a config file")
-
-
-def test_ctrl_c_in_a_job_is_one_line_in_its_log_only(tmp_path, capsys):
-    import pytest
-
-    from signorini.pipeline.joblog import job_log
-
-    with pytest.raises(KeyboardInterrupt), job_log(tmp_path / "job.log"):
-        raise KeyboardInterrupt
-    assert capsys.readouterr().err == ""
-    assert (tmp_path / "job.log").read_text(encoding="utf-8").strip().endswith("job interrupted")

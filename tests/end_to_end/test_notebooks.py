@@ -1,4 +1,5 @@
-"""The notebooks in notebooks/ run headless, without error, on the smoke scene.
+"""The notebooks in notebooks/: paired with jupytext, and run headless, without error, on the smoke
+scene; ``explore.Scene`` on the built copy.
 
 A copy of the built repository (``conftest.built_repo``: the smoke scene and the small versions
 of the studies beyond the paper) gets the notebooks; they are converted with jupytext and executed with
@@ -11,15 +12,12 @@ from __future__ import annotations
 
 import asyncio
 import json
-import math
-import os
 import shutil
 import sys
 import time
 from pathlib import Path
 
 import jupytext
-import numpy as np
 import pytest
 from helpers import ROOT, clone_built
 from nbclient import NotebookClient
@@ -42,76 +40,6 @@ def test_notebooks_are_present_and_paired():
         # saving from Jupyter rewrites the script: it must come back unchanged (no churn in git)
         assert jupytext.writes(nb, fmt="py:percent") == path.read_text(), f"{path.name}: not in jupytext's layout"
     assert "notebooks/*.ipynb" in (ROOT / ".gitignore").read_text().splitlines()
-
-
-# --- the helpers the notebooks call ----------------------------------------------------------------
-
-
-def test_expected_orders_match_table2_theory():
-    from signorini.paper import THEORETICAL_ORDERS
-
-    assert explore.expected_orders(2) == (2.0, 1.0) and explore.expected_orders(4) == (2.0, 1.0)
-    assert explore.expected_orders(16) == (THEORETICAL_ORDERS["L16"], THEORETICAL_ORDERS["W116"])
-    assert explore.expected_orders(math.inf) == (THEORETICAL_ORDERS["Linf"], THEORETICAL_ORDERS["W1inf"])
-    assert explore.norm_names(6) == ("L6", "W16") and explore.norm_names(2.5) == ("L2.5", "W12.5")
-    assert explore.norm_names(math.inf) == ("Linf", "W1inf")
-    with pytest.raises(ValueError):
-        explore.expected_orders(0.5)
-
-
-def test_locate_scene_prefers_paper_then_smoke(tmp_path, monkeypatch):
-    monkeypatch.delenv(explore.SCENE_ENV, raising=False)
-    with pytest.raises(FileNotFoundError):
-        explore.locate_scene(root=tmp_path, build=False)
-    for scene in ("smoke", "paper"):
-        d = tmp_path / "results" / scene
-        d.mkdir(parents=True)
-        (d / "errors.csv").write_text("N,h,L4\n11,0.09,0.04\n21,0.047,0.01\n")
-        (d / "eoc.csv").write_text("N,h,L4\n21,0.047,1.9\nregression,,1.9\n")
-        assert explore.locate_scene(root=tmp_path, build=False).name == scene
-    monkeypatch.setenv(explore.SCENE_ENV, "smoke")
-    assert explore.locate_scene(root=tmp_path, build=False).name == "smoke"
-    (tmp_path / "results/smoke/eoc.csv").write_text("N,h,L4\n21,0.047,1.9\n")  # truncated: not built
-    with pytest.raises(FileNotFoundError):
-        explore.locate_scene(root=tmp_path, build=False)
-
-
-def test_boundary_arclength_inverts_boundary_trace():
-    from signorini.fem.problem import Problem
-
-    trace = explore.boundary_trace(Problem(), n=50)
-    np.testing.assert_allclose(explore.boundary_arclength(trace["x"]), trace["s"], atol=1e-12)
-    assert trace["u"].min() >= 0.0 and trace["dn_u"].min() >= -1e-12  # Signorini conditions
-
-
-def test_active_set_history_matches_result():
-    from signorini.fem.discrete import build
-    from signorini.fem.problem import Problem
-
-    result, history = explore.active_set_history(build(Problem(), 16), warm_start=None)
-    assert list(history["iteration"]) == list(range(1, result.iterations + 1))
-    assert history["changes"].iloc[-1] == 0 and history["active"].iloc[-1] == result.active.size
-
-
-def test_display_artifacts(tmp_path):
-    from IPython.display import Image, Markdown
-
-    (tmp_path / "a.md").write_text("# findings\n")
-    (tmp_path / "a.csv").write_text("# comment\nsolver,tol\nosqp,1e-3\n")
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, _ = plt.subplots()
-    fig.savefig(tmp_path / "a.png")
-    plt.close(fig)
-    paths = explore.existing(tmp_path, "a.md", "a.csv", "a.png", "missing.csv")
-    assert list(paths) == ["a.md", "a.csv", "a.png"]
-    objs = explore.display_artifacts(paths)
-    assert isinstance(objs[1], Markdown) and isinstance(objs[5], Image)
-    assert list(objs[3].columns) == ["solver", "tol"]
-    assert os.fspath(paths["a.png"]).endswith("a.png")
 
 
 # --- the notebooks, executed -----------------------------------------------------------------------
@@ -209,3 +137,31 @@ def test_convergence_notebook_on_a_users_scene(notebook_env, monkeypatch):
     summary = next(p for p in plain if "regression slope" in p)
     assert "NaN" not in summary and "no theory" not in summary  # L2: 2, H1: 1
     assert "no Figure 3" in text
+
+
+@pytest.mark.slow
+def test_a_scene_reads_through_the_store_and_shows_the_tables_cells(built_repo, tmp_path):
+    """``Scene`` reads what the stages read, with their checks, and its tables are the cells of
+    the committed tables (the built copy renders paper_figures/ from the smoke scene)."""
+    import numpy as np
+    import pandas as pd
+    from helpers import clone_built
+
+    from signorini.pipeline.artifacts import CorruptArtifactError, load_npz, save_npz
+
+    scene = explore.Scene("smoke", built_repo)
+    for table in (1, 2):
+        ours = explore.ours_table(scene, table)
+        written = pd.read_csv(built_repo / f"paper_figures/table{table}.csv", index_col="h")
+        rows = [lab for lab in ours.index if lab != "theo."]
+        np.testing.assert_array_equal(ours.loc[rows].to_numpy(), written.loc[rows, ours.columns].to_numpy(dtype=float))
+    assert scene.cached_norm(21, "L4") == pytest.approx(explore.ours_table(scene, 1).loc["1/21", "L4"], rel=1e-4)
+    fields = scene.fields()
+    assert set(fields) >= {"x", "y", "u", "f"}
+    # a solution of another mesh under this mesh's name is refused, as the stages refuse it
+    repo = clone_built(built_repo, tmp_path / "repo")
+    path = repo / "results/smoke/N21/solution.npz"
+    other = load_npz(repo / "results/smoke/N11/solution.npz")
+    save_npz(path, **{k: v for k, v in other.items() if not k.startswith("_")})
+    with pytest.raises(CorruptArtifactError):
+        explore.Scene("smoke", repo).solution(21)

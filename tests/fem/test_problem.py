@@ -1,4 +1,5 @@
-"""The manufactured solution of Section 7: ψ, u, ∇u, f and the Signorini conditions.
+"""The manufactured solution of Section 7: ψ, u, ∇u, f and the Signorini conditions; the problems
+with closed-form solutions and ``make_problem``.
 
 Reference values are computed independently of ``signorini.fem.problem``: ψ from the
 ten Hermite conditions (a 10×10 solve), u and ∇u from the paper's polar formula
@@ -15,7 +16,7 @@ import numpy as np
 import pytest
 from numpy.polynomial import Polynomial
 
-from signorini.fem.problem import Problem, ProblemParameterError
+from signorini.fem.problem import ConstantProblem, FullContactProblem, Problem, ProblemParameterError, make_problem
 
 PROBLEMS = [Problem(), Problem(x0=0.47, c=3.0), Problem(x0=0.4, R=0.3, A=2.0, c=0.0), Problem(x0=0.62, R=0.35)]
 PROBLEM_IDS = ["default", "x0=0.47,c=3", "x0=0.4,R=0.3,A=2,c=0", "x0=0.62,R=0.35"]
@@ -361,3 +362,36 @@ def test_valid_parameters_are_accepted(params):
 def test_problem_is_immutable():
     with pytest.raises(dataclasses.FrozenInstanceError):
         Problem().x0 = 0.4  # type: ignore[misc]
+
+
+def test_closed_form_problems_satisfy_their_pde():
+    """-Δu + c u = f by finite differences, u ≥ 0 / ∂_ν u ≥ 0 on the boundary."""
+    x = np.random.default_rng(0).uniform(0.1, 0.9, size=(2, 50))
+    d = 1e-4
+    for p in (FullContactProblem(2.0, 3.0), ConstantProblem(2.0, 4.0), ConstantProblem(0.0, 0.0)):
+        lap = sum((p.u(x + d * e[:, None]) - 2 * p.u(x) + p.u(x - d * e[:, None])) / d**2 for e in np.eye(2))
+        np.testing.assert_allclose(-lap + p.c * p.u(x), p.f(x), atol=1e-5 * (1 + np.abs(p.f(x)).max()))
+        g = p.grad_u(x)
+        fd = np.stack([(p.u(x + d * e[:, None]) - p.u(x - d * e[:, None])) / (2 * d) for e in np.eye(2)])
+        np.testing.assert_allclose(g, fd, atol=1e-6)
+    s = np.linspace(0, 1, 11)
+    fc = FullContactProblem(1.0, 1.0)
+    bottom = np.stack([s, 0 * s])
+    assert np.all(np.abs(fc.u(bottom)) < 1e-15) and np.all(-fc.grad_u(bottom)[1] >= 0)  # ∂_ν = -∂_y
+
+
+def test_problem_factory_and_validation():
+    assert make_problem({"x0": 0.5, "R": 0.45, "A": 10, "c": 1}) == Problem()
+    assert make_problem({"kind": "constant", "value": 2.0, "c": 4.0}).exact == 0.5
+    assert make_problem({"kind": "full_contact"}).as_dict() == {"kind": "full_contact", "A": 1.0, "c": 1.0}
+    bad = [
+        {"kind": "constant", "value": -1.0},  # Dirichlet solution: no closed form (and u ≡ 0 is wrong)
+        {"kind": "constant", "value": 1.0, "c": 0.0},
+        {"kind": "constant", "value": float("nan")},
+        {"kind": "full_contact", "A": -1.0},
+        {"kind": "nosuch"},
+        {"kind": "constant", "wrong": 1.0},
+    ]
+    for params in bad:
+        with pytest.raises(ProblemParameterError):
+            make_problem(params)

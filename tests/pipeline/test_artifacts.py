@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import stat
 
 import numpy as np
 import pytest
@@ -17,6 +18,8 @@ from signorini.pipeline.artifacts import (
     save_json,
     save_npz,
 )
+from signorini.pipeline.integrity import artifact_ok
+from signorini.studies.scene.norm import norm_stage
 
 
 def leftovers(directory) -> list[str]:
@@ -148,4 +151,36 @@ def test_unserialisable_json_leaves_nothing(tmp_path):
     path = tmp_path / "r.json"
     with pytest.raises(TypeError):
         save_json(path, {"bad": object()})
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_artifacts_follow_the_umask(tmp_path):
+    old = os.umask(0o022)
+    try:
+        save_json(tmp_path / "a.json", {"x": 1})
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE((tmp_path / "a.json").stat().st_mode) == 0o644
+
+
+def test_a_hand_edited_norm_value_is_caught(solved, tmp_path):
+    d, at = solved
+    path = tmp_path / "L4.json"
+    norm_stage(at, d / "solution.npz", "L4", path, {})
+    value = load_json(path)["value"]
+    path.write_text(path.read_text().replace(repr(value), repr(2 * value)))  # a well-formed edit
+    with pytest.raises(CorruptArtifactError, match="checksum mismatch"):
+        load_json(path)
+    assert not artifact_ok(path)
+
+
+def test_interrupted_write_leaves_no_file(tmp_path):
+    from signorini.pipeline.artifacts import _atomic_write
+
+    def killed(fh):
+        fh.write(b"partial")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        _atomic_write(tmp_path / "x.npz", killed)
     assert list(tmp_path.iterdir()) == []

@@ -7,7 +7,7 @@ import copy
 
 import pytest
 import yaml
-from helpers import ROOT, copy_repo, snakemake
+from helpers import NORMS, PROBLEM, ROOT, SMOKE_N, copy_repo, snakemake
 
 from signorini.fem.discrete import build
 from signorini.fem.norms import evaluate_norms
@@ -185,3 +185,105 @@ def test_snakemake_prints_a_config_error_in_one_line(tmp_path):
     assert lines[-1].startswith("config error: scenes.mine.norms[1]: unknown norm 'W1_4'; a norm is"), lines
     assert len(lines) <= 2 and "Traceback" not in proc.stderr and "File " not in proc.stderr, lines
     assert not (tmp_path / "results").exists()
+
+
+def test_a_scene_whose_errors_vanish_is_rejected():
+    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config["scenes"]["smoke"]["problem"] = {**PROBLEM, "A": 0}
+    with pytest.raises(ConfigError, match=r"scenes\.smoke\.problem\.A: 0 makes u ≡ 0"):
+        check_config(config)
+
+
+@pytest.mark.parametrize(
+    ("N", "limit", "message"),
+    [
+        (10_000_000, None, r"N\[1\]: N = 10000000 needs about .* GB for its solve job"),
+        (30_000, None, r"N\[1\]: N = 30000 needs about 1758.3 GB"),
+        (1001, 1000, r"N\[1\]: N = 1001 needs about 2.4 GB .* more than the 1.0 GB available"),
+    ],
+)
+def test_a_mesh_that_cannot_fit_is_refused_before_any_job(N, limit, message):
+    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config = {"figures_scene": "smoke", "scenes": {"smoke": {**config["scenes"]["smoke"], "N": [11, N]}}}
+    with pytest.raises(ConfigError, match=message):
+        check_config(config, limit)
+
+
+def test_a_yaml_syntax_error_is_named_with_file_and_line(tmp_path, monkeypatch, capsys):
+    """Snakemake says only that a config file is not valid YAML; the Snakefile checks the shipped
+    config first, and ``python -m signorini.pipeline.config`` a file given with ``--configfile``."""
+    from signorini.pipeline.config import load_yaml, main
+
+    bad = tmp_path / "mine.yaml"
+    bad.write_text("scenes:\n  mine:\n    N: [11, 21\n    norms: [L4]\n")
+    with pytest.raises(ConfigError, match=r"mine\.yaml:4:10: expected ',' or '\]'"):
+        load_yaml(bad)
+    monkeypatch.chdir(ROOT)
+    assert main([str(bad)]) == 1 and "mine.yaml:4:10" in capsys.readouterr().err
+    good = tmp_path / "good.yaml"
+    problem = "    problem: {x0: 0.5, R: 0.45, A: 10, c: 1}\n"
+    good.write_text(bad.read_text().replace("21\n", "21]\n") + "    solver: active_set\n" + problem)
+    scenes = len(load_yaml("workflow/config.yaml")["scenes"]) + 1
+    assert main([str(good)]) == 0 and f"({scenes} scenes)" in capsys.readouterr().out
+
+
+def load_config() -> dict:
+    return yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+
+
+# --- config and schema ---------------------------------------------------------------------
+
+
+def validate(config: dict) -> None:
+    """What the Snakefile does: schema validation, then the semantic checks."""
+    from signorini.pipeline.config import validate_config
+
+    validate_config(config, ROOT / "workflow/schemas/config.schema.yaml")
+    check_config(config)
+
+
+def test_shipped_config_is_valid():
+    config = load_config()
+    validate(config)
+    assert config["scenes"]["paper"]["N"] == [101, 201, 301, 401, 501]
+    assert config["scenes"]["paper"]["norms"] == NORMS
+    assert config["scenes"]["paper"]["problem"] == {"x0": 0.5, "R": 0.45, "A": 10, "c": 1}
+    assert config["scenes"]["smoke"]["N"] == SMOKE_N
+
+
+@pytest.mark.parametrize(
+    ("path", "value", "expected"),
+    [
+        (("norms", 0), "L4x", ["norms", "L4x"]),  # unknown norm: schema pattern
+        (("norms", 0), "L0.5", ["norms[0]", "p ≥ 1"]),  # passes the pattern, parse_norm rejects it
+        (("solver",), "gurobi", ["solver", "gurobi"]),
+        (("N", 0), 0, ["N[0]", "0", "≥ 1"]),
+        (("N", 0), -3, ["N"]),
+        (("N", 1), 201.5, ["N", "integer"]),
+        (("N", 1), 201.0, ["N[1]", "not an integer"]),  # JSON schema counts 201.0 as integer
+        (("N", 1), "201", ["N", "integer"]),
+        (("N",), 101, ["N", "a list"]),
+        (("norms",), "L4", ["norms", "a list"]),
+        (("problem", "x0"), "half", ["x0", "number"]),
+        (("problem", "R"), 0.6, ["problem", "R"]),  # support leaves the square: Problem rejects it
+        (("nroms",), ["L4"], ["nroms"]),  # a typo in a key
+    ],
+)
+def test_invalid_config_names_the_field(path, value, expected):
+    config = copy.deepcopy(load_config())
+    target = config["scenes"]["smoke"]
+    for key in path[:-1]:
+        target = target[key]
+    target[path[-1]] = value
+    with pytest.raises(Exception) as info:  # WorkflowError (schema) or ConfigError (semantics)
+        validate(config)
+    message = str(info.value)
+    for fragment in expected:
+        assert fragment in message, message
+
+
+def test_unknown_figures_scene_is_rejected():
+    config = load_config()
+    config["figures_scene"] = "nope"
+    with pytest.raises(ConfigError, match="figures_scene"):
+        validate(config)

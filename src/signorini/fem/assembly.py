@@ -5,7 +5,7 @@ quadrature convention of the whole package.  Linear (and, on request, bilinear)
 forms are assembled over consecutive chunks of triangles, so that the quadrature
 data of a mesh with millions of triangles never exists for the whole mesh at once.
 
-Two routes give the same arrays, bit for bit (tests/test_mesh_assembly.py):
+Two routes give the same arrays, bit for bit (tests/fem/test_assembly.py):
 
 - scikit-fem's forms (``system_matrix``, ``assemble``) on any P1 mesh: per-element
   COO triplets, summed by scipy (``9 · #T`` triplets at once);

@@ -100,7 +100,7 @@ def p1_at_points(
     The affine P1 map written out (barycentrics λ = (1 - ξ - η, ξ, η)): scikit-fem's
     ``CellBasis`` does the same in general but builds (3, 2, elements, q) basis arrays,
     which at N = 501 costs 3 s and 1 GiB per rule; this costs 0.2 s.  Tested against
-    ``CellBasis.interpolate`` in tests/test_norms.py.
+    ``CellBasis.interpolate`` in tests/fem/test_norms.py.
     """
     lam = np.vstack([1.0 - X[0] - X[1], X[0], X[1]])  # (3, q)
     v = p[:, t]  # (2, 3, elements)

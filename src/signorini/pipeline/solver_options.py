@@ -5,7 +5,7 @@ A configuration's solver options (a scene's ``solver_options``, a work-precision
 nothing here imports a solver: the active-set and cvxpy signatures are read from the source of
 ``signorini.solvers`` (``ast``), Clarabel's settings from its extension (about 1 ms), and OSQP's
 and SCS's from the tables below (importing OSQP pulls in ``scipy.sparse``, about 0.5 s; SCS names
-its settings nowhere but in its documentation).  ``tests/test_solvers.py`` checks both tables
+its settings nowhere but in its documentation).  ``tests/pipeline/test_solver_options.py`` checks both tables
 against the installed packages.
 """
 

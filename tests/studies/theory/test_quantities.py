@@ -1,10 +1,9 @@
-"""The theory scene: Ritz projection / supercloseness, discrete H^{1/2}(∂Ω) norm, contact set,
-expected rates, and the `theory` target end to end on a small version of the scene."""
+"""The theory scene's quantities (``signorini.studies.theory.quantities``): Ritz projection and
+supercloseness, the discrete H^{1/2}(∂Ω) norm, the contact set."""
 
 from __future__ import annotations
 
 import numpy as np
-import pandas as pd
 import pytest
 from skfem import LinearForm
 
@@ -13,7 +12,6 @@ from signorini.fem.discrete import build
 from signorini.fem.mesh import friedrichs_keller
 from signorini.fem.problem import Problem
 from signorini.fem.solve import solve_discrete
-from signorini.paper import expected_rate
 from signorini.solvers.linalg import factorize
 from signorini.studies.theory.quantities import (
     boundary_h12_norm,
@@ -120,59 +118,3 @@ def test_contact_set_of_the_default_problem():
     assert c["n_contact_nodes"] == np.count_nonzero(u_h[disc.boundary] == 0.0)
     assert 0.0 < c["free_point_offset"] <= 1.0 / 41  # first contact node right of x0
     assert c["hausdorff_discrete_to_exact"] < 1e-3  # discrete contact ⊂ exact contact set
-
-
-def test_expected_rates():
-    assert expected_rate("L4") == 2.0 and expected_rate("L2") == 2.0
-    assert expected_rate("L16") == pytest.approx(1.625)
-    assert expected_rate("Linf") == 1.5 and expected_rate("W1inf") == 0.5
-    assert expected_rate("W116") == pytest.approx(0.625)
-    assert expected_rate("H12") == 1.5 and expected_rate("H1") == 1.0  # Table 2's theo. row; W^{1,2}
-    assert expected_rate("L4plus") == 2.0 and expected_rate("L2boundary") is None
-
-
-def test_theory_target_end_to_end(built_repo):
-    md = (built_repo / "paper_figures/theory.md").read_text()
-    assert "Supercloseness" in md and "| L4 |" in md
-    # the test scene's true norms: their own EOC table, kept out of the rates against p
-    true_section = md.split("## The same EOCs of the true norms")[1].split("##")[0]
-    assert "| h | L4_true | W1inf_true |" in true_section and "| expected (− ε) | 2.000 | 0.500 |" in true_section
-    assert "| L4_true |" not in md.split("## Rates against p")[1]
-    for name in ("theory_rates.png", "theory_extra.png", "theory.csv"):
-        assert (built_repo / "paper_figures" / name).stat().st_size > 0
-
-
-def test_table2_rows_give_the_eoc_of_each_mesh_pair():
-    """``table2_rows``: e = C h^r gives EOC r on every consecutive pair, in the paper's norms
-    present, meshes sorted by N; the findings render them with the expected orders."""
-    from signorini.paper import TABLE2_NORMS
-    from signorini.studies.theory.report import table2_rows
-
-    N = np.array([1001, 101, 201, 2001])
-    h = 1.0 / N
-    errors = pd.DataFrame({"N": N, "h": h, "L4": 3.0 * h**2, "W1inf": 0.7 * h**0.5, "L2": h**2})
-    t2 = table2_rows(errors)
-    assert list(t2.columns) == ["pair", "L4", "W1inf"]  # only Table 2's norms, in its order
-    assert list(t2["pair"]) == ["1/101 → 1/201", "1/201 → 1/1001", "1/1001 → 1/2001"]
-    np.testing.assert_allclose(t2["L4"], 2.0, rtol=1e-12)
-    np.testing.assert_allclose(t2["W1inf"], 0.5, rtol=1e-12)
-    assert set(TABLE2_NORMS) >= {"L4", "Linf", "W14", "W1inf", "H12"}
-
-
-def test_the_accuracy_of_the_true_values_is_stated_and_a_miss_is_named():
-    """theory.md states the largest relative quadrature error estimate of the true values and
-    names each value whose levels did not agree to the tolerance."""
-    from signorini.studies.theory.report import accuracy_note
-
-    def record(norm, N, value, estimate, converged):
-        accuracy = {"error_estimate": estimate, "rtol": 1e-4, "converged": converged}
-        return {"norm": norm, "N": N, "value": value, "quadrature_error": accuracy}
-
-    good = [record("L4_true", 101, 2.0, 2e-6, True), record("Linf_true", 201, 1.0, 3e-5, True)]
-    assert accuracy_note(good) == (
-        "Largest estimated quadrature error: 3.0e-05 relative (Linf_true at N = 201); every value converged to 0.0001."
-    )
-    note = accuracy_note([*good, record("Linf_true", 2001, 0.5, 6e-4, False)])
-    assert "1.2e-03 relative (Linf_true at N = 2001)" in note
-    assert "Not converged to 0.0001 within the finest level: Linf_true at N = 2001 (1.2e-03)" in note
-    assert accuracy_note([]) == ""

@@ -15,13 +15,12 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import pytest
 import yaml
-from helpers import PROBLEM, ROOT, TEST_PEER_PYTHON, clone_built, planned, snakemake
+from helpers import PEER_DRIVER_FILE as DRIVER
+from helpers import PROBLEM, ROOT, TEST_PEER_PYTHON
 
 from signorini.fem.discrete import DiscreteProblem
-from signorini.pipeline.paths import PEER_DRIVER
 from signorini.studies.scene.discretise import discretise_stage
 from signorini.studies.scene.norm import norm_stage
 from signorini.studies.scene.solve import solve_stage
@@ -30,7 +29,6 @@ from signorini.studies.work_precision import measure as wp
 from signorini.studies.work_precision import peers
 from signorini.studies.work_precision.study import SolverConfig, study_configs
 
-DRIVER = ROOT / PEER_DRIVER
 NORMS = ["L4", "W14", "Linf"]
 REQUIRED = os.environ.get("SIGNORINI_REQUIRE_PEERS") == "1"
 FAST = {"wait_s": 0.0, "retries": 0, "min_repeats": 1, "budget_s": 1.0}  # no waiting for a quiet machine
@@ -234,54 +232,6 @@ def test_peer_smoke(tmp_path, petsc_probe, N):
         elif tight["status"] == "failed":
             assert tight["reason"].startswith("PETSc"), (name, tight["reason"])
     assert got == EXPECTED
-
-
-def test_peers_in_the_small_study(built_repo):
-    """The built copy's study has one peer: certified rows when petsc4py is there; otherwise,
-    whatever kept the peer from starting, skipped rows that give the probe's reason."""
-    df = pd.read_csv(built_repo / "paper_figures/work_precision.csv")
-    rows = df[df["config"] == "petsc_tron"]
-    assert len(rows) == 2 * 3  # N = 11, 21: default and two tolerances
-    warm = df[df["config"] == "petsc_tron_ws"]  # below the cascade's first coarse level: no start to give
-    assert len(warm) == 2 * 3 and set(warm["status"]) == {"skipped"} and set(warm["start"]) == {"cascade"}
-    found = peers.probe(TEST_PEER_PYTHON, DRIVER)
-    if found.get("petsc4py"):
-        tight = rows[rows["tol_label"] == "1e-08"]
-        assert set(tight["status"]) == {"ok"} and (tight["kkt_worst"] <= 1e-8).all()
-        assert tight["converged_reason"].str.startswith("CONVERGED").all() and (tight["setup_s"] > 0).all()
-        assert "## PETSc peers" in (built_repo / "paper_figures/work_precision.md").read_text(encoding="utf-8")
-    else:
-        assert set(rows["status"]) == {"skipped"}
-        # N = 11 gives the probe's reason; N = 21 the same, "at N=11" (skipped on the previous mesh)
-        assert found["error"] and all(str(r).startswith(found["error"]) for r in rows["reason"]), rows["reason"]
-
-
-def test_a_driver_edit_reruns_only_the_peer_jobs(built_repo, tmp_path):
-    repo = clone_built(built_repo, tmp_path / "repo")
-    driver = repo / PEER_DRIVER
-    driver.write_text(driver.read_text() + "\n# edited\n")
-    jobs = planned(snakemake(repo, "-n", "work_precision"))
-    measured = {(wc["N"], wc["solver"]) for rule, wc in jobs if rule == "work_precision_measure"}
-    assert measured == {(N, name) for N in ("11", "21") for name in ("petsc_tron", "petsc_tron_ws")}
-
-
-def test_same_warm_start_variants():
-    """``same_warm_start``: every peer gets a ``_ws`` variant started from the cascade; the
-    others do not (cvxpy's QP interfaces take no initial guess); below the cascade's first
-    coarse level the variant's runs are skipped with the reason."""
-    study = {
-        "configs": {
-            "as": {"solver": "active_set"},
-            "tron": {"solver": "petsc_tao", "label": "TRON", "options": {"tao_type": "tron"}},
-        },
-        "qp_solvers": ["OSQP"],
-        "same_warm_start": True,
-    }
-    configs = study_configs(study)
-    assert list(configs) == ["as", "tron", "osqp", "tron_ws"]
-    assert configs["tron_ws"].initial == "cascade" and configs["tron_ws"].label == "TRON (cascade start)"
-    assert configs["tron"].initial == "cold" and configs["as"].initial == "cascade"
-    assert SolverConfig(**configs["tron_ws"].as_dict()) == configs["tron_ws"]  # the rule's params round trip
 
 
 def test_a_warm_started_peer_below_the_cascade_is_skipped(tmp_path):

@@ -1,0 +1,166 @@
+"""The rules' code inputs on repository copies: each rule lists the import closure of its script
+(``signorini.pipeline.codedeps``), and an edit of a module re-runs exactly the jobs that import it.
+
+The edit matrix appends a comment to each module under ``src/signorini/`` in turn, in a copy
+of the built repository (``conftest.built_repo``), and checks with a dry run that exactly the
+jobs whose stage imports the module (directly or indirectly), and the jobs downstream of
+them, are planned.  The dry runs happen in one interpreter (``snakemake.cli.main`` called in
+a loop), so the matrix costs a fraction of a second per module."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+from helpers import BUILT_TARGETS, clone_built, dry_run_jobs, job_key
+
+from signorini.pipeline.codedeps import import_closure
+
+AGGREGATES = {"all", "theory", "work_precision", "stability", "true_norms"}  # target rules without a script
+
+
+def test_every_rule_with_a_script_lists_its_closure(tmp_path):
+    """The Snakefile lists the closure as a rule's code input: the solve job of a dry run."""
+    from helpers import copy_repo, snakemake
+
+    copy_repo(tmp_path)
+    text = snakemake(tmp_path, "-n", "--forceall", "results/smoke/N11/solution.npz").stdout
+    (solve,) = [job for job in dry_run_jobs(text) if job["rule"] == "solve"]
+    listed = {p for p in solve["input"] if p.startswith(("src/", "workflow/scripts/"))}
+    closure = import_closure(tmp_path / "workflow/scripts/solve.py", tmp_path / "src")
+    assert listed == {"workflow/scripts/solve.py"} | {p.relative_to(tmp_path).as_posix() for p in closure}
+    assert "src/signorini/solvers/active_set.py" in listed and "src/signorini/fem/norms.py" not in listed
+
+
+# --- the edit matrix ---------------------------------------------------------------------------
+
+DRIVER = textwrap.dedent(
+    r"""
+    import contextlib, io, json, os, sys, time
+    from pathlib import Path
+    from snakemake.cli import main
+
+    def dry(args):
+        sys.argv = ["snakemake", "-n", *args]  # what the Snakefile sees (a dry run: read-only)
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf), contextlib.redirect_stderr(buf):
+            try:
+                main(["-n", *args])
+            except SystemExit as exit:
+                if exit.code:
+                    raise RuntimeError(buf.getvalue()[-3000:])
+        return buf.getvalue()
+
+    targets, modules = json.loads(sys.argv[1]), json.loads(sys.argv[2])
+    out = {"": dry(["--forceall", *targets]), "unchanged": dry(targets)}
+    for rel in modules:
+        path = Path(rel)
+        text, st = path.read_text(), path.stat()
+        try:
+            path.write_text(text + "\n# an edit\n")
+            future = time.time() + 5
+            os.utime(path, (future, future))
+            out[rel] = dry(targets)
+        finally:
+            path.write_text(text)
+            os.utime(path, ns=(st.st_atime_ns, st.st_mtime_ns))
+    print(json.dumps(out))
+    """
+)
+
+
+@pytest.fixture(scope="module")
+def edit_matrix(built_repo, tmp_path_factory):
+    """{module: planned jobs after its edit}, the whole DAG (``""``) and the repository copy."""
+    repo = clone_built(built_repo, tmp_path_factory.mktemp("matrix"))
+    modules = sorted(p.relative_to(repo).as_posix() for p in (repo / "src/signorini").rglob("*.py"))
+    proc = subprocess.run(
+        [sys.executable, "-c", DRIVER, json.dumps(BUILT_TARGETS), json.dumps(modules)],
+        cwd=repo,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    assert proc.returncode == 0, proc.stderr[-5000:]
+    runs = json.loads(proc.stdout.strip().splitlines()[-1])
+    return repo, {key: dry_run_jobs(text) for key, text in runs.items()}
+
+
+def expected_after_edit(repo: Path, dag: list[dict], module: str) -> set:
+    """The jobs whose script imports ``module`` (directly or not), and every job downstream."""
+    code = {}
+    for rule in {job["rule"] for job in dag} - AGGREGATES:
+        script = repo / "workflow/scripts" / f"{rule}.py"
+        code[rule] = {p.relative_to(repo).as_posix() for p in import_closure(script, repo / "src")}
+    producer = {path: job_key(job) for job in dag for path in job["output"]}
+    parents = {job_key(job): {producer[p] for p in job["input"] if p in producer} for job in dag}
+    rerun = {job_key(job) for job in dag if module in code.get(job["rule"], ())}
+    changed = True
+    while changed:
+        grown = rerun | {key for key, ups in parents.items() if ups & rerun}
+        changed, rerun = grown != rerun, grown
+    return rerun
+
+
+@pytest.mark.slow
+def test_edit_matrix_plans_exactly_the_importing_jobs(edit_matrix):
+    repo, runs = edit_matrix
+    dag = runs[""]
+    assert runs["unchanged"] == [], "the built copy is not up to date"
+    wrong = {}
+    for module, jobs in runs.items():
+        if module in ("", "unchanged"):
+            continue
+        got, want = {job_key(job) for job in jobs}, expected_after_edit(repo, dag, module)
+        if got != want:
+            wrong[module] = {"unexpected": sorted(got - want)[:5], "missing": sorted(want - got)[:5]}
+    assert not wrong, json.dumps(wrong, indent=1)
+
+
+def rules_after(runs: dict, module: str) -> set[str]:
+    return {job["rule"] for job in runs[f"src/signorini/{module}"]} - AGGREGATES
+
+
+@pytest.mark.slow
+def test_edits_rerun_what_the_design_promises(edit_matrix):
+    _, runs = edit_matrix
+    figures = {"figure2", "figure3", "theory_report", "work_precision_figures", "stability_atlas"}
+    assert rules_after(runs, "plotting.py") == figures  # every figure of every study, nothing else
+    assert rules_after(runs, "studies/paper/runtime.py") == {"runtime"}  # no solve, no norm
+    paper = {"discretise", "solve", "norm", "errors", "eoc", "sample", "table1", "table2", "figure2", "figure3",
+             "reproduction", "runtime"}
+    for renderer in ("report.py", "findings.py", "figures.py", "table.py"):
+        rules = rules_after(runs, f"studies/work_precision/{renderer}")
+        assert rules and rules <= {"work_precision_table", "work_precision_figures", "work_precision_report"}
+        assert not rules & paper
+    assert rules_after(runs, "studies/paper/tables.py") == {"table1", "table2", "reproduction"}
+    norms = rules_after(runs, "fem/norms.py")
+    assert "norm" in norms and not norms & {"discretise", "solve", "sample", "figure2"}
+    solver = rules_after(runs, "solvers/active_set.py")
+    assert {"solve", "norm", "errors", "eoc", "table1", "runtime"} <= solver and "discretise" not in solver
+
+
+@pytest.mark.slow
+def test_jobs_ran_only_modules_they_declare(edit_matrix):
+    """Soundness of the static closure: the package modules each job of the built copy really
+    loaded (the last line of its log) are among the rule's code inputs."""
+    repo, runs = edit_matrix
+    checked = 0
+    for job in runs[""]:
+        if job["rule"] in AGGREGATES or not job["log"]:
+            continue
+        lines = [ln for ln in (repo / job["log"][0]).read_text().splitlines() if "modules run:" in ln]
+        assert lines, f"{job['log'][0]}: no modules line"
+        loaded = lines[-1].split("modules run: ", 1)[1].split()
+        script = repo / "workflow/scripts" / f"{job['rule']}.py"
+        declared = {
+            ".".join(p.relative_to(repo / "src").with_suffix("").parts).removesuffix(".__init__")
+            for p in import_closure(script, repo / "src")
+        }
+        assert set(loaded) <= declared, f"{job['rule']} ran undeclared {sorted(set(loaded) - declared)}"
+        checked += 1
+    assert checked > 50
