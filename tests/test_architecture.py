@@ -196,3 +196,124 @@ def test_no_text_io_call_leaves_its_encoding_to_the_locale():
     pattern = re.compile(r"\b(open|read_text|write_text|read_csv|to_csv)\(")
     found += [f"{p.relative_to(ROOT)}: {m.group(0)}" for p in rules for m in pattern.finditer(p.read_text())]
     assert not found, "\n".join(found)
+
+
+# --- the tests' layout ------------------------------------------------------------------------------
+
+# tests/ mirrors src/signorini/ (docs/architecture.md): the module signorini.<a>.<b> is tested in
+# tests/<a>/test_<b>.py, a package whose __init__ holds code in test_<package>.py inside its folder
+# (signorini.solvers: tests/solvers/test_solvers.py; signorini itself: tests/test_signorini.py),
+# another top-level package of src/ (the logger plugin) in tests/test_<package>.py.  Modules listed
+# here, with the reason, need no test module of their own.
+LAYOUT_EXEMPT: dict[str, str] = {}
+# test modules at the top of tests/ that check the repository, not one module
+REPOSITORY_CHECKS = ("test_architecture.py", "test_docs.py", "test_setup.py")
+END_TO_END = "end_to_end"  # tests/end_to_end/: Snakemake runs on repository copies, by theme
+
+
+def holds_code(path: Path) -> bool:
+    """A module, or a package ``__init__`` with more than a docstring and ``from __future__`` imports."""
+    if path.name != "__init__.py":
+        return True
+    body = ast.parse(path.read_text(encoding="utf-8")).body
+    docstring = [n for n in body[:1] if isinstance(n, ast.Expr) and isinstance(n.value, ast.Constant)]
+    future = [n for n in body if isinstance(n, ast.ImportFrom) and n.module == "__future__"]
+    return len(body) > len(docstring) + len(future)
+
+
+def layout_test_module(module: str, package: bool) -> Path:
+    """Where the layout puts the tests of ``module`` (dotted), relative to tests/."""
+    parts = module.split(".")
+    if parts[0] != "signorini":
+        return Path(f"test_{parts[-1]}.py")
+    folder = parts[1:] if package else parts[1:-1]
+    return Path(*folder, f"test_{parts[-1]}.py")
+
+
+def imported_modules(path: Path) -> set[str]:
+    """Every module a file imports, anywhere in it; ``from a import b`` counts as ``a`` and ``a.b``."""
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            names |= {alias.name for alias in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
+            names |= {node.module} | {f"{node.module}.{alias.name}" for alias in node.names}
+    return names
+
+
+def layout_problems(src: Path, tests: Path, exempt: dict[str, str]) -> list[str]:
+    """What breaks the layout: a module without its test module, a test module that does not import
+    its module, a test module (outside tests/end_to_end/) of no module, a stale exemption."""
+    expected = {}
+    for path in sorted(src.rglob("*.py")):
+        if path.name != "__main__.py" and holds_code(path):
+            module = _module_name(path, src)
+            expected[module] = layout_test_module(module, path.name == "__init__.py")
+    problems = [f"{module}: exempt but not a module of src/" for module in sorted(set(exempt) - set(expected))]
+    for module, rel in expected.items():
+        if module in exempt:
+            continue
+        if not (tests / rel).is_file():
+            problems.append(f"{module}: no tests/{rel.as_posix()}")
+        elif module not in imported_modules(tests / rel):
+            problems.append(f"tests/{rel.as_posix()} does not import {module}")
+    allowed = set(expected.values()) | {Path(name) for name in REPOSITORY_CHECKS}
+    for path in sorted(tests.rglob("test_*.py")):
+        rel = path.relative_to(tests)
+        if rel.parts[0] != END_TO_END and rel not in allowed:
+            problems.append(f"tests/{rel.as_posix()} is the test module of no module of src/")
+    return problems
+
+
+def test_every_module_has_its_test_module_which_imports_it():
+    assert layout_problems(SRC, ROOT / "tests", LAYOUT_EXEMPT) == []
+
+
+FAKE_SRC = {
+    "signorini/__init__.py": '"""The package."""\n',  # a docstring only: no tests of its own
+    "signorini/cli.py": "def main(): ...\n",
+    "signorini/fem/__init__.py": "",
+    "signorini/fem/mesh.py": "def mesh(): ...\n",
+    "signorini/solvers/__init__.py": "from signorini.solvers.qp import solve\n",  # code: tested itself
+    "signorini/solvers/qp.py": "def solve(): ...\n",
+    "plugin/__init__.py": "class Handler: ...\n",
+}
+FAKE_TESTS = {
+    "test_architecture.py": "",
+    "test_cli.py": "from signorini import cli\n",
+    "test_plugin.py": "import plugin\n",
+    "fem/test_mesh.py": "def test_mesh():\n    from signorini.fem.mesh import mesh\n",
+    "solvers/test_solvers.py": "from signorini.solvers import solve\n",
+    "solvers/test_qp.py": "import signorini.solvers.qp as qp\n",
+    "end_to_end/test_workflow.py": "",  # a theme, no module
+}
+
+
+@pytest.mark.parametrize(
+    ("change", "exempt", "problems"),
+    [
+        ({}, {}, []),
+        ({"fem/test_mesh.py": None}, {}, ["signorini.fem.mesh: no tests/fem/test_mesh.py"]),
+        ({"fem/test_mesh.py": "import numpy\n"}, {}, ["tests/fem/test_mesh.py does not import signorini.fem.mesh"]),
+        ({"fem/test_mesh.py": "from signorini.fem import meshes\n"}, {},
+         ["tests/fem/test_mesh.py does not import signorini.fem.mesh"]),
+        ({"fem/test_mesh.py": None, "test_mesh.py": "from signorini.fem.mesh import mesh\n"}, {},
+         ["signorini.fem.mesh: no tests/fem/test_mesh.py",
+          "tests/test_mesh.py is the test module of no module of src/"]),
+        ({"fem/test_faults.py": "from signorini.fem.mesh import mesh\n"}, {},
+         ["tests/fem/test_faults.py is the test module of no module of src/"]),
+        ({"solvers/test_solvers.py": None}, {}, ["signorini.solvers: no tests/solvers/test_solvers.py"]),
+        ({"test_plugin.py": None}, {}, ["plugin: no tests/test_plugin.py"]),
+        ({"fem/test_mesh.py": None}, {"signorini.fem.mesh": "a reason"}, []),
+        ({}, {"signorini.fem.gone": "a reason"}, ["signorini.fem.gone: exempt but not a module of src/"]),
+    ],
+    ids=["complete", "missing", "not-imported", "similar-name", "misplaced", "theme-file", "package-init", "plugin",
+         "exempt", "stale-exemption"],
+)
+def test_the_layout_check_finds_what_breaks_the_layout(tmp_path, change, exempt, problems):
+    for root, files in (("src", FAKE_SRC), ("tests", FAKE_TESTS | change)):
+        for rel, text in files.items():
+            if text is not None:
+                (tmp_path / root / rel).parent.mkdir(parents=True, exist_ok=True)
+                (tmp_path / root / rel).write_text(text, encoding="utf-8")
+    assert layout_problems(tmp_path / "src", tmp_path / "tests", exempt) == problems

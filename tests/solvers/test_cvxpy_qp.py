@@ -13,7 +13,13 @@ from helpers import rel_max_diff as rel
 from signorini.fem.discrete import build
 from signorini.fem.problem import Problem
 from signorini.solvers import KKTError, NotConvergedError, solve
-from signorini.solvers.cvxpy_qp import cvxpy_solve, installed_qp_solvers
+from signorini.solvers.cvxpy_qp import (
+    TOLERANCE_OPTIONS,
+    cvxpy_solve,
+    data_scales,
+    installed_qp_solvers,
+    solver_settings,
+)
 
 
 def _expected_qp_solvers() -> list[str]:
@@ -116,3 +122,30 @@ def test_normalized_cvxpy_is_scale_invariant_and_raw_is_not():
 
 def _qp(disc):
     return disc.A, disc.b, disc.boundary
+
+
+# ---------------------------------------------------------------------------------
+# the data of normalize=True and the solvers' settings
+# ---------------------------------------------------------------------------------
+
+
+def test_the_scales_of_the_normalised_data_follow_the_data(cache):
+    """α = max A_ii and β = α ‖u_D‖∞ (u_D: the solution with the boundary clamped to 0): scaling A
+    by s and b by t scales α by s and β by t; b = 0 gives β = 1."""
+    disc = cache.discrete({}, 11)
+    alpha, beta = data_scales(disc.A, disc.b, disc.boundary)
+    assert alpha == disc.A.diagonal().max() and beta > 0
+    alpha2, beta2 = data_scales(1e6 * disc.A, 1e-3 * disc.b, disc.boundary)
+    assert alpha2 == pytest.approx(1e6 * alpha, rel=1e-14) and beta2 == pytest.approx(1e-3 * beta, rel=1e-6)
+    assert data_scales(disc.A, 0 * disc.b, disc.boundary) == (alpha, 1.0)
+
+
+def test_a_tolerance_sets_every_tolerance_of_a_solver():
+    osqp = solver_settings("OSQP", 1e-9, {})
+    assert all(osqp[name] == 1e-9 for name in TOLERANCE_OPTIONS["OSQP"][0]) and osqp["polishing"] is True
+    assert solver_settings("OSQP", None, {"polish": False}) == {"polishing": False}
+    highs = solver_settings("HIGHS", 1e-12, {})
+    assert highs["qp_regularization_value"] == 0.0
+    assert all(highs[name] == 1e-10 for name in TOLERANCE_OPTIONS["HIGHS"][0])  # HiGHS's smallest
+    with pytest.raises(ValueError, match="no tolerance mapping"):
+        solver_settings("NOSUCHSOLVER", 1e-8, {})

@@ -1,0 +1,55 @@
+"""The grammar of norm names (``signorini.fem.norm_names``): what a name parses into, its one
+spelling, and the names outside the grammar."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from signorini.fem.norm_names import (
+    UnknownNormError,
+    canonical_norm_name,
+    lp_names,
+    parse_norm_name,
+    true_name,
+)
+
+
+@pytest.mark.parametrize(
+    ("name", "family", "p", "part", "true", "canonical"),
+    [
+        ("L4", "L", 4.0, "", False, "L4"),
+        ("L1.0", "L", 1.0, "", False, "L1"),
+        ("L01", "L", 1.0, "", False, "L1"),
+        ("W12.50", "W1", 2.5, "", False, "W12.5"),
+        ("Linfminus", "L", math.inf, "minus", False, "Linfminus"),
+        ("L4plus_true", "L", 4.0, "plus", True, "L4plus_true"),
+        ("W1inf_true", "W1", math.inf, "", True, "W1inf_true"),
+        ("H1", "H1", 2.0, "", False, "H1"),
+        ("H12_true", "H12", None, "", True, "H12_true"),
+        ("L2boundary", "L2boundary", None, "", False, "L2boundary"),
+    ],
+)
+def test_a_name_parses_into_its_norm_and_has_one_spelling(name, family, p, part, true, canonical):
+    spec = parse_norm_name(name)
+    assert (spec.family, spec.p, spec.part, spec.true) == (family, p, part, true)
+    assert canonical_norm_name(name) == canonical
+    again = parse_norm_name(canonical)
+    assert (again.family, again.p, again.part, again.true) == (family, p, part, true)
+    assert spec.base == name.removesuffix("_true")
+    assert spec.is_max == (p == math.inf) and spec.on_boundary == (family in ("H12", "L2boundary"))
+
+
+@pytest.mark.parametrize("name", ["L0.5", "W14plus", "l4", "L4_true_true", "H12plus", "Lp", ""])
+def test_names_outside_the_grammar_are_refused(name):
+    with pytest.raises(UnknownNormError):
+        parse_norm_name(name)
+    with pytest.raises(UnknownNormError):
+        canonical_norm_name(name)
+
+
+def test_true_names_and_the_names_of_an_exponent():
+    assert [true_name(n) for n in ("L4", "W1inf", "H12_true")] == ["L4_true", "W1inf_true", "H12_true"]
+    assert lp_names(6) == ("L6", "W16") and lp_names(2.5) == ("L2.5", "W12.5")
+    assert lp_names(math.inf) == ("Linf", "W1inf") and lp_names(4.0) == ("L4", "W14")

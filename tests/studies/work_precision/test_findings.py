@@ -1,0 +1,46 @@
+"""The findings of the work-precision study (``signorini.studies.work_precision.findings``): which
+run keeps Table 1's digits fastest, how runs are ranked and started, which rows are peers.
+
+``findings`` on a synthetic table is tested in ``tests/studies/work_precision/test_measure.py``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from signorini.studies.work_precision.findings import (
+    fastest_to_digits,
+    is_peer,
+    pd_numeric,
+    printed,
+    rank_key,
+    starts,
+)
+
+
+def test_the_fastest_run_that_keeps_table_1s_digits_per_configuration(measurements):
+    """At 1e-02 the QP solver's L⁴ cells change; 1e-06 keeps them; the failed solver has none."""
+    fastest = fastest_to_digits(measurements, 40, ["L4", "W14"])
+    assert fastest == {
+        "exact": {"tol_label": "exact", "time_s": 0.04, "rank": 0.04},
+        "qp": {"tol_label": "1e-06", "time_s": 0.12, "rank": 0.12},
+    }
+    assert printed(0.1 / 40**2) == "6.2500·10⁻⁵" and printed(math.nan) == "—"
+
+
+def test_ranks_starts_peers_and_numeric_columns(measurements):
+    assert rank_key(measurements) == "time_s"  # no reference units measured: seconds
+    timed = measurements.assign(time_ref=2.0 * measurements["time_s"])
+    assert rank_key(timed) == "time_ref"
+    assert set(starts(measurements[measurements["config"] == "exact"])) == {"cascade"}
+    assert set(starts(measurements[measurements["config"] != "exact"])) == {"cold"}
+    cold = measurements.assign(label=measurements["label"].replace({"AS": "AS (cold)"}))
+    assert set(starts(cold)) == {"cold"}
+    assert not is_peer(measurements).any()
+    peers = measurements.assign(solver=np.where(measurements["config"] == "qp", "petsc_tao", measurements["solver"]))
+    assert list(is_peer(peers)) == list(peers["config"] == "qp")
+    flags = measurements.assign(loaded=["True", False, True, None] * 3)
+    np.testing.assert_array_equal(pd_numeric(flags, "loaded")[:4], [1.0, 0.0, 1.0, math.nan])
+    assert np.isnan(pd_numeric(measurements, "no_such_column")).all()

@@ -1,0 +1,32 @@
+"""Solver configurations raced on one system (``signorini.studies.work_precision.race``): round-robin
+under the timing protocol, certified alike, compared with the reference configuration."""
+
+from __future__ import annotations
+
+import math
+
+from signorini.studies.work_precision.race import REFERENCE, race
+from signorini.studies.work_precision.study import study_configs
+from signorini.studies.work_precision.timing import Protocol, Timer
+
+FAST = {"wait_s": 0.0, "retries": 0, "min_repeats": 1, "budget_s": 1.0}  # no waiting for a quiet machine
+
+
+def test_exact_routes_agree_with_the_reference_and_a_failing_one_stops_its_task_only(cache):
+    disc = cache.discrete({}, 21)
+    configs = study_configs({"configs": {
+        "active_set": {"solver": "active_set", "label": "direct"},
+        "cold": {"solver": "active_set", "label": "direct (cold)", "options": {"warm_start": None}},
+        "multigrid": {"solver": "multigrid", "label": "multigrid", "options": {"max_coarse": 20}},
+        "truncated": {"solver": "active_set", "label": "one step", "options": {"warm_start": None, "max_iter": 1}},
+    }})
+    out = race(disc, configs, None, Timer(Protocol.from_mapping(FAST)))
+    runs = out["configs"]
+    assert REFERENCE == "active_set" and list(runs) == ["active_set", "cold", "multigrid", "truncated"]
+    for name in ("active_set", "cold", "multigrid"):
+        assert runs[name]["status"] == "ok" and runs[name]["agreement"] <= 1e-12, (name, runs[name])
+        assert runs[name]["time_s"] > 0 and runs[name]["iterations"] >= 1
+    assert runs["active_set"]["agreement"] == 0.0 and runs["active_set"]["ratio_cpu"] == 1.0
+    assert runs["cold"]["start"] == "cold" and runs["active_set"]["start"] == "cascade"
+    assert runs["truncated"]["status"] == "failed" and math.isnan(runs["truncated"]["agreement"])
+    assert out["start"] == {}  # no peer started from the cascade: no coarse solve timed for one
