@@ -50,9 +50,9 @@ all: setup
 check: setup
 	$(BIN)/python -m signorini.pipeline.check
 
-## test: set up, then run the test suite (what .ci/run calls)
+## test: set up, then run the test suite on $(CORES) workers, a test file per worker (what .ci/run calls)
 test: setup
-	$(BIN)/pytest -q
+	$(BIN)/pytest -q -n $(CORES) --dist loadfile
 
 ## lock: recompile environment.lock from requirements.in (pinned, with hashes)
 lock:

@@ -16,6 +16,8 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
+import fcntl  # noqa: E402
+import shutil  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -94,9 +96,28 @@ def solved(tmp_path_factory):
 @pytest.fixture(scope="session")
 def built_repo(tmp_path_factory):
     """A repository copy whose config holds the shipped scenes ``SHIPPED_SCENES``, ``TEST_SCENES`` and
-    ``figures_scene: smoke``, with every target of ``BUILT_TARGETS`` built.  Tests that edit or
-    damage it work on ``helpers.clone_built`` copies."""
-    repo = copy_repo(tmp_path_factory.mktemp("built"))
+    ``figures_scene: smoke``, with every target of ``BUILT_TARGETS`` built (or of the targets named
+    in ``SIGNORINI_TEST_BUILT_TARGETS``, space-separated, for a run of a few test files that need
+    fewer).  Built once per run: under pytest-xdist the first worker that asks builds it under a
+    file lock in the run's shared temporary directory, and the others wait for it and use it.
+    Tests that edit or damage it work on ``helpers.clone_built`` copies."""
+    targets = os.environ.get("SIGNORINI_TEST_BUILT_TARGETS", "").split() or list(BUILT_TARGETS)
+    if not os.environ.get("PYTEST_XDIST_WORKER"):
+        return _build_repo(tmp_path_factory.mktemp("built"), targets)
+    shared = tmp_path_factory.getbasetemp().parent  # one directory per run, common to its workers
+    with open(shared / "built.lock", "w", encoding="utf-8") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        repo, done = shared / "built", shared / "built.done"
+        if not done.exists():
+            shutil.rmtree(repo, ignore_errors=True)  # a build another worker failed
+            repo.mkdir()
+            _build_repo(repo, targets)
+            done.touch()
+    return repo
+
+
+def _build_repo(dest, targets: list[str]):
+    repo = copy_repo(dest)
     path = repo / "workflow/config.yaml"
     config = yaml.safe_load(path.read_text())
     config["scenes"] = {name: config["scenes"][name] for name in SHIPPED_SCENES} | TEST_SCENES
@@ -106,6 +127,6 @@ def built_repo(tmp_path_factory):
     config["figures_scene"] = "smoke"
     path.write_text(yaml.safe_dump(config, sort_keys=False))
     t0 = time.perf_counter()
-    snakemake(repo, "-c2", *BUILT_TARGETS, timeout=3600)  # a loaded 2-core machine needs more than 10 min
+    snakemake(repo, "-c2", *targets, timeout=3600)  # a loaded 2-core machine needs more than 10 min
     print(f"built repository copy: {time.perf_counter() - t0:.1f} s")
     return repo

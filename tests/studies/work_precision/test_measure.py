@@ -196,9 +196,10 @@ def test_failing_solver_is_recorded_not_raised(small_study, monkeypatch):
     monkeypatch.setattr(signorini.solvers, "cvxpy_solve", sloppy)
     recs = measure(small_study, {"solver": "OSQP"}, out="sloppy.json")
     assert [r["status"] for r in recs] == ["inaccurate", "inaccurate"]
-    assert [r["reason"] for r in recs] == [
-        "KKT residual 1.0e-01 > tolerance 1e-03",  # OSQP's default
-        "KKT residual 1.0e-01 > tolerance 1e-02",
+    # the residual and the tolerance it missed are recorded as numbers, the reason names the kind
+    assert [(r["reason"], r["kkt_worst"], r["kkt_required"]) for r in recs] == [
+        ("KKT residual above the tolerance", 1e-1, 1e-3),  # OSQP's default
+        ("KKT residual above the tolerance", 1e-1, 1e-2),
     ]
     assert recs[0]["alg_L4"] > 0 and recs[0]["iterations"] == 7
 
@@ -390,3 +391,17 @@ def test_figure_draws_the_fastest_configuration_per_family_with_the_legend_below
     fig.canvas.draw()
     lowest = min(ax.get_window_extent().y0 for ax in fig.axes)
     assert all(leg.get_window_extent().y1 < lowest for leg in fig.legends)  # no legend over a panel
+
+
+def test_inaccurate_answers_are_grouped_with_their_worst_ratio_from_the_recorded_numbers():
+    import pandas as pd
+
+    from signorini.studies.work_precision.report import _failure_rows
+    from signorini.studies.work_precision.study import INACCURATE
+
+    rows = [
+        {"label": "OSQP", "status": "inaccurate", "reason": INACCURATE, "N": N, "tol_label": "1e-06", "kkt_worst": w}
+        for N, w in ((101, 3e-6), (201, 2.5e-5))
+    ]
+    bad = pd.DataFrame([r | {"kkt_required": 1e-6} for r in rows])
+    assert _failure_rows(bad) == [["OSQP", "inaccurate", "1e-06 at 101, 201", f"{INACCURATE} (up to ×25.0)"]]

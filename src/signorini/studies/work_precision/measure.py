@@ -53,7 +53,7 @@ import numpy as np
 from signorini.fem.p1norms import p1_norms
 from signorini.pipeline.artifacts import load_json, save_json
 from signorini.studies.scene.store import SceneMesh, load_system, read_norm
-from signorini.studies.work_precision.study import EXACT_LABEL, GROWTH_EXPONENT, SolverConfig
+from signorini.studies.work_precision.study import EXACT_LABEL, GROWTH_EXPONENT, SolverConfig, accuracy_status
 from signorini.studies.work_precision.timing import CallFailed, Protocol, ReferenceKernel, Timer
 
 log = logging.getLogger(__name__)
@@ -209,10 +209,8 @@ def run_solver(
     result = measured.result
     extra = {"timing": measured.summary(timer.protocol, timer.machine.cores)}
     times = [x.cpu_s for x in measured.samples]
-    worst = result.certificate.worst
-    if not np.isfinite(worst) or worst > required:
-        return Attempt(result, "inaccurate", f"KKT residual {worst:.1e} > tolerance {required:.0e}", times, extra)
-    return Attempt(result, "ok", "", times, extra)
+    status, reason = accuracy_status(result.certificate.worst, required)
+    return Attempt(result, status, reason, times, extra | {"kkt_required": required})
 
 
 def warm_up(config: SolverConfig) -> None:

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from signorini.studies.work_precision.study import PEER_PYTHON, PEER_SOLVERS, SolverConfig
+from signorini.studies.work_precision.study import PEER_PYTHON, PEER_SOLVERS, SolverConfig, accuracy_status
 
 DEFAULT_TOL = 1e-8  # PETSc's default snes_rtol and tao_gatol/grtol: what a default run must reach
 PROBE_TIMEOUT_S = 120.0
@@ -204,13 +204,11 @@ def outcome(config: SolverConfig, disc, tol: float | None, answer: dict, u) -> P
     required = DEFAULT_TOL if tol is None else float(tol)
     result = peer_result(config.name, disc.A, disc.b, disc.boundary, u, required, answer)
     times = [float(t) for t in answer.get("solve_cpu_times", answer["solve_times"])]
+    extra["kkt_required"] = required
     if not answer["converged"]:
         return PeerOutcome(result, "failed", f"PETSc {answer['converged_reason']}", times, extra)
-    worst = result.certificate.worst
-    if not np.isfinite(worst) or worst > required:
-        reason = f"KKT residual {worst:.1e} > tolerance {required:.0e}"
-        return PeerOutcome(result, "inaccurate", reason, times, extra)
-    return PeerOutcome(result, "ok", "", times, extra)
+    status, reason = accuracy_status(result.certificate.worst, required)
+    return PeerOutcome(result, status, reason, times, extra)
 
 
 def peer_info(answer: Mapping) -> str:

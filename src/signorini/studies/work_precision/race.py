@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from signorini.studies.work_precision.study import SolverConfig
+from signorini.studies.work_precision.study import SolverConfig, accuracy_status
 from signorini.studies.work_precision.timing import ReferenceKernel, Task, Timer, round_robin, task_summary
 
 REFERENCE = "active_set"  # the reference solver of the ratios: our cascade active set
@@ -48,10 +48,8 @@ def _status(config: SolverConfig, disc, tol: float | None, result) -> tuple[str,
         out = outcome(config, disc, tol, answer, u)
         return out.status, out.reason, out.result.u, out.result.iterations
     required = solver_options(config, tol, None)[1]
-    worst = result.certificate.worst
-    ok = np.isfinite(worst) and worst <= required
-    reason = "" if ok else f"KKT residual {worst:.1e} > tolerance {required:.0e}"
-    return ("ok" if ok else "inaccurate"), reason, result.u, int(result.iterations)
+    status, reason = accuracy_status(result.certificate.worst, required)
+    return status, reason, result.u, int(result.iterations)
 
 
 def race(

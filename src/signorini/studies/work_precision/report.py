@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import math
 import os
-import re
 from collections.abc import Mapping, Sequence
 
 from signorini.formatting import fmt_rel, fmt_time, h_label, md_table, sci_md
@@ -350,22 +349,16 @@ def _cost_table(found: Mapping) -> list[str]:
     return ["## Cost of accuracy (exact solver)", "", intro, "", md_table(header, rows)]
 
 
-_RATIO = re.compile(r"KKT residual (\S+) > tolerance (\S+)")
-
-
 def _failure_rows(bad) -> list[list[str]]:
     """Failed, inaccurate and skipped runs grouped by (solver, status, reason)."""
     groups: dict[tuple[str, str, str], list[tuple[int, str]]] = {}
     worst: dict[tuple[str, str, str], float] = {}
     for _, r in bad.iterrows():
-        reason = str(r["reason"]) or "—"
-        m = _RATIO.fullmatch(reason)
-        if m:  # inaccurate answers: one row per solver, with the worst residual/tolerance ratio
-            reason = "KKT residual above the tolerance"
-        key = (str(r["label"]), str(r["status"]), reason)
+        key = (str(r["label"]), str(r["status"]), str(r["reason"]) or "—")
         groups.setdefault(key, []).append((int(r["N"]), str(r["tol_label"])))
-        if m:
-            worst[key] = max(worst.get(key, 0.0), float(m[1]) / float(m[2]))
+        ratio = float(r.get("kkt_worst", math.nan)) / float(r.get("kkt_required", math.nan))
+        if r["status"] == "inaccurate" and math.isfinite(ratio):  # one row per solver, the worst ratio
+            worst[key] = max(worst.get(key, 0.0), ratio)
     rows = []
     for key, runs in groups.items():
         label, status, reason = key

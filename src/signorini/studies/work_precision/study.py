@@ -3,6 +3,7 @@ block and the checks that the scene may reuse its source scene's artifacts."""
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -19,6 +20,16 @@ PEER_SOLVERS = {"petsc_snes": "snes", "petsc_tao": "tao"}
 PEER_PYTHON = "/usr/bin/python3"  # Debian's python3-petsc4py-real is built for it
 CASCADE_START = "cascade"
 WARM_SUFFIX = "_ws"  # name of a peer's variant started from the cascade (``same_warm_start``)
+
+
+INACCURATE = "KKT residual above the tolerance"  # the reason of an answer the certificate does not accept
+
+
+def accuracy_status(worst: float, required: float) -> tuple[str, str]:
+    """``("ok", "")`` when the worst relative KKT residual of an answer meets the ``required``
+    tolerance, else ``("inaccurate", INACCURATE)``; the two numbers are recorded as they are
+    (``kkt_worst``, ``kkt_required``) and only the report formats them."""
+    return ("ok", "") if math.isfinite(worst) and worst <= required else ("inaccurate", INACCURATE)
 
 
 class StudyConfigError(ValueError):

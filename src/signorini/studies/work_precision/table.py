@@ -50,6 +50,7 @@ ID_COLUMNS = [
     "kkt_dual",
     "kkt_complementarity",
     "kkt_worst",
+    "kkt_required",
     "build_s",
     "job_wall_s",
     "job_started",
