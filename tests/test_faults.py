@@ -18,7 +18,7 @@ import yaml
 from helpers import PROBLEM, ROOT
 
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json, save_json
-from signorini.pipeline.config import ConfigError, check_config
+from signorini.pipeline.config import ConfigError, check_config, load_config
 from signorini.pipeline.integrity import artifact_ok, cached_artifacts, corrupt_artifacts
 from signorini.studies.scene.discretise import discretise_stage
 from signorini.studies.scene.eoc import eoc_stage
@@ -97,7 +97,7 @@ def test_a_vanishing_error_or_a_single_mesh_stops_the_eoc_job(tmp_path):
 
 
 def test_a_scene_whose_errors_vanish_is_rejected():
-    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config = load_config(ROOT / "workflow/config.yaml")
     config["scenes"]["smoke"]["problem"] = {**PROBLEM, "A": 0}
     with pytest.raises(ConfigError, match=r"scenes\.smoke\.problem\.A: 0 makes u ≡ 0"):
         check_config(config)

@@ -16,6 +16,7 @@ from signorini.fem.mesh import mesh_width
 from signorini.paper import PAPER_NORMS
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz, save_json, save_npz
 from signorini.pipeline.config import ConfigError, check_config
+from signorini.pipeline.config import load_config as read_config
 from signorini.pipeline.integrity import artifact_ok, quarantine_corrupt
 from signorini.pipeline.joblog import job_log
 from signorini.pipeline.paths import FIGURES, PATHS, TARGETS
@@ -31,7 +32,7 @@ SMOKE_N = [11, 21, 41]
 
 
 def load_config() -> dict:
-    return yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    return read_config(ROOT / "workflow/config.yaml")
 
 
 # --- config and schema ---------------------------------------------------------------------
@@ -394,7 +395,7 @@ def test_per_mesh_norm_jobs_compute_the_same_norms_and_switching_reruns_nothing(
     repo = clone_built(built_repo, tmp_path / "repo")
     target = "results/smoke/errors.csv"
     assert planned(snakemake(repo, "-n", *PER_MESH, "--", target)) == []  # per_norm artifacts serve
-    norms = yaml.safe_load((repo / "workflow/config.yaml").read_text())["scenes"]["smoke"]["norms"]
+    norms = read_config(repo / "workflow/config.yaml")["scenes"]["smoke"]["norms"]
     Ns = [11, 21, 41]
     before = {(N, n): load_json(repo / f"results/smoke/N{N}/norms/{n}.json") for N in Ns for n in norms}
     errors_before = (repo / target).read_bytes()

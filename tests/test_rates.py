@@ -11,7 +11,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 
 from signorini.fem.convergence import eoc, regression_slope
 from signorini.fem.discrete import build
@@ -19,6 +18,7 @@ from signorini.fem.mesh import mesh_width
 from signorini.fem.norms import compute_norms, error_field
 from signorini.fem.problem import Problem
 from signorini.fem.solve import solve_discrete
+from signorini.pipeline.config import load_config
 
 SEQUENCE = (21, 41, 81)
 NORMS = ["L4", "W14", "W1inf", "H12"]
@@ -96,7 +96,7 @@ def test_second_case_eocs_on_its_finest_meshes_match_the_theory(built_repo):
     import pandas as pd
 
     shipped = Path(__file__).resolve().parents[1] / "workflow/config.yaml"
-    config = yaml.safe_load(shipped.read_text())["scenes"]["case2"]
+    config = load_config(shipped)["scenes"]["case2"]
     problem = Problem.from_params(config["problem"])
     assert all(0.0 < (problem.x0 * N) % 1.0 < 1.0 for N in config["N"])  # never a mesh node
     eocs = pd.read_csv(built_repo / "results/case2/eoc.csv", dtype={"N": str})
