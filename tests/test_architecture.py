@@ -376,3 +376,18 @@ def test_citation_names_this_version_and_the_paper():
     (paper,) = cff["references"]
     assert paper["doi"].startswith("10.1007/s00211") and paper["journal"] == "Numerische Mathematik"
     assert cff["license"] in (ROOT / "LICENSE").read_text().replace("BSD 3-Clause", "BSD-3-Clause")
+
+
+def test_the_thread_variables_are_named_in_one_module():
+    """The environment a job computes in is set in one place (``signorini.pipeline.jobenv``):
+    no other file of the tree names a thread variable."""
+    from signorini.pipeline.jobenv import THREAD_VARIABLES
+
+    files = [ROOT / "Snakefile", *(p for d in ("src", "workflow", "benchmarks", "tests", "notebooks")
+                                   for p in (ROOT / d).rglob("*") if p.suffix in (".py", ".smk"))]
+    naming = {
+        str(p.relative_to(ROOT))
+        for p in files
+        if any(name in p.read_text(encoding="utf-8") for name in THREAD_VARIABLES)
+    }
+    assert naming == {"src/signorini/pipeline/jobenv.py"}

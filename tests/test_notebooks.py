@@ -25,6 +25,7 @@ from helpers import clone_built
 from nbclient import NotebookClient
 
 from signorini import explore
+from signorini.pipeline.jobenv import THREAD_VARIABLES
 
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.py"))
@@ -135,9 +136,7 @@ def notebook_env(tmp_path_factory, built_repo):
         "JUPYTER_PATH": str(jupyter),
         explore.ROOT_ENV: str(repo),
         explore.SCENE_ENV: "smoke",
-        "OMP_NUM_THREADS": "1",
-        "OPENBLAS_NUM_THREADS": "1",
-        "MKL_NUM_THREADS": "1",
+        **{name: "1" for name in THREAD_VARIABLES},
         "PYTHONDONTWRITEBYTECODE": "1",
     }
     with pytest.MonkeyPatch.context() as mp:  # the kernel inherits the environment
