@@ -7,13 +7,19 @@ from snakemake.utils import min_version
 
 min_version("9.0")
 
-# One BLAS/OpenMP thread per job unless the caller says otherwise: jobs run side by side
-# (-c2) and threaded BLAS inside the active-set loop oversubscribes the cores (5-20x slower).
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+# Jobs import the package from src/ next to this Snakefile -- the very files the rules list as
+# inputs -- whether or not (or from where) it is installed: script jobs inherit PYTHONPATH.
+SRC = os.path.join(workflow.basedir, "src")
+sys.path.insert(0, SRC)
+os.environ.update(
+    PYTHONPATH=os.pathsep.join(p for p in (SRC, os.environ.get("PYTHONPATH")) if p)
+)
+from signorini.pipeline.jobenv import single_threaded
+
+single_threaded()  # one BLAS/OpenMP thread per job unless the caller says otherwise (jobs inherit it)
+
 # Snakemake names no file or line for a YAML syntax error in a config file: check this one first
 # (python -m signorini.pipeline.config my.yaml checks files given with --configfile).
-sys.path.insert(0, os.path.join(workflow.basedir, "src"))
 from signorini.pipeline.config import (
     DEFAULT_CONFIG,
     SCHEMA,

@@ -47,6 +47,7 @@ from signorini.fem.norms import evaluate_norms
 from signorini.fem.problem import Problem
 from signorini.fem.solve import solve_discrete
 from signorini.pipeline.artifacts import save_json
+from signorini.pipeline.jobenv import THREAD_VARIABLES
 from signorini.solvers import cvxpy_solve
 from signorini.solvers.linalg import backend_name, factorize
 
@@ -78,7 +79,7 @@ def machine_info() -> dict:
         "processor": platform.processor() or platform.machine(),
         "python": sys.version.split()[0],
         "load_average_at_start": list(os.getloadavg()),
-        "threads_env": {k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")},
+        "threads_env": {k: os.environ.get(k) for k in THREAD_VARIABLES},
     }
     try:
         with open("/proc/meminfo", encoding="utf-8") as fh:

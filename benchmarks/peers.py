@@ -32,8 +32,9 @@ import sys
 import tempfile
 from pathlib import Path
 
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):  # one thread, like the peers
-    os.environ.setdefault(_var, "1")
+from signorini.pipeline.jobenv import single_threaded
+
+single_threaded()  # one thread, like the peers (before numpy loads its BLAS)
 
 import numpy as np  # noqa: E402
 import yaml  # noqa: E402

@@ -20,6 +20,7 @@ from pathlib import Path
 from signorini.fem.norms import evaluate_norms
 from signorini.fem.true_norms import true_norm
 from signorini.paper import TABLE2_NORMS
+from signorini.pipeline.jobenv import THREAD_VARIABLES
 from signorini.studies.scene.store import SceneMesh
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -67,7 +68,7 @@ def main() -> None:
     out = {
         "date": time.strftime("%Y-%m-%d"),
         "load_1min": [load0, os.getloadavg()[0]],
-        "threads": os.environ.get("OPENBLAS_NUM_THREADS", "unset"),
+        "threads": {name: os.environ.get(name, "unset") for name in THREAD_VARIABLES},
         "rows": rows,
     }
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)

@@ -13,8 +13,9 @@ import os
 # where threads buy nothing, and on a loaded 2-core machine busy-waiting BLAS threads
 # slowed the (then PCG-based) active-set solver 5-20x (N = 101 cold start: 25 s vs 1.1 s).
 # Must happen before numpy is imported.
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+from signorini.pipeline.jobenv import single_threaded  # noqa: E402
+
+single_threaded()
 
 import fcntl  # noqa: E402
 import shutil  # noqa: E402

@@ -111,12 +111,11 @@ def test_the_cli_refuses_what_the_config_check_refuses(capsys, no_mesh, args, me
 
 def test_the_cli_and_the_config_check_give_the_same_message(capsys, no_mesh):
     """One implementation: the config's message with the option in place of the field."""
-    import yaml
     from helpers import ROOT
 
-    from signorini.pipeline.config import ConfigError, check_config
+    from signorini.pipeline.config import ConfigError, check_config, load_config
 
-    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text(encoding="utf-8"))
+    config = load_config(ROOT / "workflow/config.yaml")
     config["scenes"]["smoke"]["problem"]["A"] = 1e-320
     config["scenes"]["smoke"]["N"] = [11]
     config["figures_scene"] = "paper"

@@ -23,6 +23,7 @@ from helpers import ROOT, clone_built
 from nbclient import NotebookClient
 
 from signorini import explore
+from signorini.pipeline.jobenv import THREAD_VARIABLES
 
 NOTEBOOKS = sorted((ROOT / "notebooks").glob("[0-9][0-9]_*.py"))
 KERNEL = "signorini-notebook-test"
@@ -62,9 +63,7 @@ def notebook_env(tmp_path_factory, built_repo):
         "JUPYTER_PATH": str(jupyter),
         explore.ROOT_ENV: str(repo),
         explore.SCENE_ENV: "smoke",
-        "OMP_NUM_THREADS": "1",
-        "OPENBLAS_NUM_THREADS": "1",
-        "MKL_NUM_THREADS": "1",
+        **{name: "1" for name in THREAD_VARIABLES},
         "PYTHONDONTWRITEBYTECODE": "1",
     }
     with pytest.MonkeyPatch.context() as mp:  # the kernel inherits the environment

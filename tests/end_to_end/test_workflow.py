@@ -16,6 +16,8 @@ from helpers import NORMS, PROBLEM, ROOT, SMOKE_N, clone_built, copy_repo, plann
 from signorini.fem.mesh import boundary_nodes, friedrichs_keller
 from signorini.fem.problem import Problem
 from signorini.pipeline.artifacts import load_json, load_npz, save_npz
+from signorini.pipeline.config import load_config
+from signorini.pipeline.config import load_config as read_config
 from signorini.pipeline.paths import FIGURES, PATHS, TARGETS
 
 
@@ -164,7 +166,7 @@ def test_per_mesh_norm_jobs_compute_the_same_norms_and_switching_reruns_nothing(
     repo = clone_built(built_repo, tmp_path / "repo")
     target = "results/smoke/errors.csv"
     assert planned(snakemake(repo, "-n", *PER_MESH, "--", target)) == []  # per_norm artifacts serve
-    norms = yaml.safe_load((repo / "workflow/config.yaml").read_text())["scenes"]["smoke"]["norms"]
+    norms = read_config(repo / "workflow/config.yaml")["scenes"]["smoke"]["norms"]
     Ns = [11, 21, 41]
     before = {(N, n): load_json(repo / f"results/smoke/N{N}/norms/{n}.json") for N in Ns for n in norms}
     errors_before = (repo / target).read_bytes()
@@ -212,7 +214,7 @@ def test_second_case_eocs_on_its_finest_meshes_match_the_theory(built_repo):
     import pandas as pd
 
     shipped = ROOT / "workflow/config.yaml"
-    config = yaml.safe_load(shipped.read_text())["scenes"]["case2"]
+    config = load_config(shipped)["scenes"]["case2"]
     problem = Problem.from_params(config["problem"])
     assert all(0.0 < (problem.x0 * N) % 1.0 < 1.0 for N in config["N"])  # never a mesh node
     eocs = pd.read_csv(built_repo / "results/case2/eoc.csv", dtype={"N": str})

@@ -20,12 +20,14 @@ from signorini.pipeline.config import (
     check_config,
     validate_config,
 )
+from signorini.pipeline.config import load_config as read_config
 
 SCHEMA = ROOT / "workflow/schemas/config.schema.yaml"
 
 
 def shipped() -> dict:
-    return yaml.safe_load((ROOT / "workflow/config.yaml").read_text(encoding="utf-8"))
+    """The shipped config with its scene defaults filled in, as a run sees it."""
+    return load_config(ROOT / "workflow/config.yaml")
 
 
 def refused(config: dict) -> str:
@@ -168,7 +170,7 @@ def test_schema_errors_are_one_line_naming_field_value_and_what_is_allowed(path,
 
 def test_a_missing_field_is_named():
     config = shipped()
-    del config["scenes"]["smoke"]["solver"]
+    del config["scenes"]["smoke"]["solver"], config["scene_defaults"]["solver"]
     assert refused(config) == "scenes.smoke: 'solver' missing (required: N, norms, solver, problem)"
 
 
@@ -187,8 +189,30 @@ def test_snakemake_prints_a_config_error_in_one_line(tmp_path):
     assert not (tmp_path / "results").exists()
 
 
+def test_scene_defaults_fill_what_a_scene_leaves_out_and_merge_the_problem():
+    from signorini.pipeline.config import apply_scene_defaults
+
+    config = {
+        "scene_defaults": {"norms": ["L2"], "solver": "active_set", "problem": {"x0": 0.5, "R": 0.45, "A": 10, "c": 1}},
+        "scenes": {"a": {"N": [8]}, "b": {"N": [8], "norms": ["H1"], "problem": {"A": 5}}},
+    }
+    apply_scene_defaults(config)
+    a, b = config["scenes"]["a"], config["scenes"]["b"]
+    assert a["norms"] == ["L2"] and b["norms"] == ["H1"] and b["solver"] == "active_set"
+    assert b["problem"] == {"x0": 0.5, "R": 0.45, "A": 5, "c": 1}
+    a["problem"]["A"] = 7  # each scene holds its own copy: editing one changes no other
+    assert config["scene_defaults"]["problem"]["A"] == 10 and b["problem"]["A"] == 5
+
+
+def test_the_shipped_scenes_state_the_shared_problem_and_norms_once():
+    raw = yaml.safe_load((ROOT / "workflow/config.yaml").read_text(encoding="utf-8"))
+    shared = raw["scene_defaults"]
+    for name, block in raw["scenes"].items():
+        assert block.get("problem") != shared["problem"] and block.get("norms") != shared["norms"], name
+
+
 def test_a_scene_whose_errors_vanish_is_rejected():
-    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config = load_config(ROOT / "workflow/config.yaml")
     config["scenes"]["smoke"]["problem"] = {**PROBLEM, "A": 0}
     with pytest.raises(ConfigError, match=r"scenes\.smoke\.problem\.A: 0 makes u ≡ 0"):
         check_config(config)
@@ -227,8 +251,9 @@ def test_a_yaml_syntax_error_is_named_with_file_and_line(tmp_path, monkeypatch, 
     assert main([str(good)]) == 0 and f"({scenes} scenes)" in capsys.readouterr().out
 
 
-def load_config() -> dict:
-    return yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+def load_config(path=ROOT / "workflow/config.yaml") -> dict:
+    """The config at ``path`` (the shipped one by default) with its scene defaults filled in."""
+    return read_config(path)
 
 
 # --- config and schema ---------------------------------------------------------------------

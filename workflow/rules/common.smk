@@ -20,16 +20,10 @@ if shlex.quote(sys.executable) != sys.executable and "conda" not in _deploy:
         "`make setup VENV=$HOME/.venvs/signorini` (the checkout itself may have spaces)."
     )
 
-# Jobs import the package from src/ next to this Snakefile -- the very files the rules list
-# as inputs -- whether or not (or from where) it is installed: script jobs inherit PYTHONPATH.
-SRC = str(Path(workflow.basedir) / "src")
-sys.path.insert(0, SRC)
-os.environ.update(
-    PYTHONPATH=os.pathsep.join(p for p in (SRC, os.environ.get("PYTHONPATH")) if p),
-    # the jobs end quietly on Ctrl-C (signorini/__init__.py); this process imported the package
-    # already (the Snakefile), so Snakemake's own handling of Ctrl-C stays as it is
-    SIGNORINI_JOB_INTERRUPT="quiet",
-)
+# the jobs end quietly on Ctrl-C (signorini/__init__.py); this process imported the package
+# already (the Snakefile, which also puts src/ on the jobs' PYTHONPATH), so Snakemake's own
+# handling of Ctrl-C stays as it is
+os.environ.update(SIGNORINI_JOB_INTERRUPT="quiet")
 
 from signorini.fem.norm_names import true_name
 from signorini.paper import FIGURE3_NORMS, TABLE1_NORMS, TABLE2_NORMS

@@ -52,7 +52,12 @@ def check_cache(execute):
     remove_stale(cached, current_code_digest, execute, current_params)
     tables = {name: FIGURES[name]["csv"] for name in ("table1", "table2")}
     if (reason := rendered_mismatch(tables, scene_of(FIG)["N"])) is not None:
-        meshes = ("table1", "table2", "figure3", "reproduction")  # what shows the meshes
+        meshes = (
+            "table1",
+            "table2",
+            "figure3",
+            "reproduction",
+        )  # what shows the meshes
         rendered = [p for rule in meshes for p in FIGURES[rule].values()]
         remove_rendered(rendered, reason, execute)
     remove_leftover_temporaries([paths.RESULTS, paths.FIGDIR], execute=execute)

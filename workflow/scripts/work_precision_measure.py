@@ -1,15 +1,10 @@
 """rule work_precision_measure: one solver configuration at all its tolerances on one mesh."""
 
-import os
+# one BLAS/OpenMP thread (signorini.pipeline.jobenv), inherited from the workflow process
 
-# one BLAS/OpenMP thread, as the PETSc peers get: CPU time is then the time of one core, and
-# two jobs never oversubscribe the machine (set before numpy loads its BLAS)
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
-
-from signorini.pipeline.joblog import job_log  # noqa: E402
-from signorini.studies.scene.store import SceneMesh  # noqa: E402
-from signorini.studies.work_precision.measure import measure_stage  # noqa: E402
+from signorini.pipeline.joblog import job_log
+from signorini.studies.scene.store import SceneMesh
+from signorini.studies.work_precision.measure import measure_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 

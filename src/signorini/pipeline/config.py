@@ -1,12 +1,15 @@
 """Semantic checks of the workflow configuration beyond its JSON schema.
 
-The Snakefile validates the config against ``workflow/schemas/config.schema.yaml`` (which also
-fills in the defaults, e.g. ``diagonal: sw_ne``) and then calls ``check_config``; every error
+The Snakefile fills in each scene's fields from the config's ``scene_defaults``, validates the
+config against ``workflow/schemas/config.schema.yaml`` (which also fills in the schema's defaults,
+e.g. ``diagonal: sw_ne``) and then calls ``check_config``; every error
 names the offending field, e.g. ``scenes.paper.N[1]: 201.0 is not an integer``.
 """
 
 from __future__ import annotations
 
+import copy
+import os
 import sys
 from collections.abc import Mapping, Sequence
 from contextlib import contextmanager
@@ -108,12 +111,35 @@ def schema_message(error) -> str:
     return f"{field}: {' '.join(error.message.split())[:200]}"
 
 
+def apply_scene_defaults(config: dict) -> dict:
+    """Fill in every scene's fields from the config's ``scene_defaults`` (in place; the config is
+    returned): a field a scene does not give is a copy of the default, and a mapping such as
+    ``problem`` is merged field by field (a scene's ``problem: {A: 5}`` changes only ``A``)."""
+    defaults = config.get("scene_defaults") or {}
+    for block in (config.get("scenes") or {}).values():
+        if not isinstance(block, dict):
+            continue  # the schema check names it
+        for key, value in defaults.items():
+            given = block.get(key)
+            if isinstance(value, dict) and isinstance(given, dict):
+                block[key] = copy.deepcopy(value) | given
+            elif key not in block:
+                block[key] = copy.deepcopy(value)
+    return config
+
+
+def load_config(path: str | os.PathLike = DEFAULT_CONFIG) -> dict:
+    """A workflow config file as a run sees its scenes (``apply_scene_defaults``), unchecked."""
+    return apply_scene_defaults(load_yaml(path))
+
+
 def validate_config(config: dict, schema: str | Path = SCHEMA) -> None:
-    """The schema check (one line per error, ``schema_message``), then Snakemake's ``validate``,
-    which fills in the schema's defaults."""
+    """The scene defaults (``apply_scene_defaults``), the schema check (one line per error,
+    ``schema_message``), then Snakemake's ``validate``, which fills in the schema's defaults."""
     import jsonschema
     from snakemake.utils import validate
 
+    apply_scene_defaults(config)
     validator = jsonschema.Draft202012Validator(load_yaml(schema))
     error = jsonschema.exceptions.best_match(validator.iter_errors(config))
     if error is not None:
@@ -307,14 +333,17 @@ def _check_runtime(where: str, Ns: list, norms: list, node: NodeLimits) -> None:
             )
 
 
-def check_config(config: Mapping, mem_limit_mb: int | None = None, node: NodeLimits | None = None) -> None:
+def check_config(config: dict, mem_limit_mb: int | None = None, node: NodeLimits | None = None) -> None:
     """Semantic checks of a schema-valid config: scene names that can be paths, integer ``N``
     strictly increasing, norm names of the grammar (``fem.norm_names``) in their one spelling and
     each once, admissible problem parameters with an amplitude whose errors do not underflow,
     conventions, meshes whose jobs fit into ``mem_limit_mb`` (default: this machine's memory; with
     ``node``, the largest node of a Slurm partition: its memory and time limit), the solver's
-    options (``signorini.pipeline.solver_options``), and a ``figures_scene`` with the paper's norms."""
+    options (``signorini.pipeline.solver_options``), and a ``figures_scene`` with the paper's norms.
+    The scene defaults are filled in first (``apply_scene_defaults``: a no-op on a validated config)."""
     from signorini.pipeline.resources import machine_mem_mb
+
+    apply_scene_defaults(config)
 
     limit = int(mem_limit_mb) if mem_limit_mb else machine_mem_mb()
     available = "available"

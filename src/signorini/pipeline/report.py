@@ -188,9 +188,9 @@ def plan(root: str | os.PathLike = ".", config: Mapping | None = None) -> list[S
     they read, ``paths.RENDER_INPUTS``) all exist, and whether they were built here."""
     root = Path(root)
     if config is None:
-        from signorini.pipeline.config import load_yaml
+        from signorini.pipeline.config import load_config
 
-        config = load_yaml(root / "workflow/config.yaml")
+        config = load_config(root / "workflow/config.yaml")
     studies = []
     for target, rules in paths.TARGETS.items():
         study = Study(target)
@@ -262,9 +262,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.what == "build":
         return build(args.out)
-    from signorini.pipeline.config import load_yaml
+    from signorini.pipeline.config import load_config
 
-    config = load_yaml("workflow/config.yaml")
+    config = load_config("workflow/config.yaml")
     studies = plan(".", config)
     if args.what == "status":
         for s in studies:

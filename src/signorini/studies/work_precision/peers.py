@@ -85,10 +85,9 @@ def _unavailable(reason: str) -> dict:
 
 def _env() -> dict[str, str]:
     """The driver's environment: one BLAS/OpenMP thread, like every job (no oversubscription)."""
-    env = dict(os.environ)
-    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        env.setdefault(var, "1")
-    return env
+    from signorini.pipeline.jobenv import single_threaded
+
+    return dict(single_threaded(dict(os.environ)))
 
 
 def _last_line(text: str) -> str:
