@@ -1,0 +1,160 @@
+"""How every stage of the theory scene's chain grows with the mesh: time and peak memory per stage.
+
+    python benchmarks/scale.py                              # N = 501 1001 2001 4001 -> docs/evidence/scale.json
+    python benchmarks/scale.py --N 101 201 --out /tmp/s.json   # a quick check
+
+Each stage is the function the pipeline's job runs (``discretise_stage``, ``solve_stage`` with
+the direct and the multigrid route, ``norms_stage`` with all of the scene's convention norms of
+a mesh, as one per-mesh job computes them, ``norms_stage`` with each true norm of Table 2, and
+``quantities_stage``), run in a fresh child process so that its wall time and its peak resident
+memory (``ru_maxrss``) are its own; one BLAS thread.  The stages of a mesh read the artifacts
+the previous ones wrote (the multigrid route's solution feeds the norms), in a working directory
+kept between runs (``--workdir``).  The direct route is skipped where its predicted memory
+(``pipeline.resources``) exceeds this machine's.
+
+Keys: ``stages[<stage>][<N>] = {seconds, peak_rss_gib, load1}``; ``exponents[<stage>]``, the p of
+time ∝ unknowns^p between successive N; ``solve_speedup_over_direct_N2001``; ``peak_rss_gib_N4001``,
+the largest job at N = 4001; the load average before and after every stage.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+TRUE_NORMS = ("L4_true", "L16_true", "Linf_true", "W14_true", "W116_true", "W1inf_true", "H12_true")
+ROUTES = {"solve_direct": "active_set", "solve_multigrid": "multigrid"}
+
+
+def _scene() -> dict:
+    from signorini.pipeline.config import load_config
+
+    return load_config(ROOT / "workflow/config.yaml")["scenes"]["theory"]
+
+
+def run_stage(stage: str, N: int, workdir: Path) -> None:
+    """In the child: run one stage on mesh N and print its wall time and peak RSS as JSON."""
+    from signorini.fem.norm_names import parse_norm_name
+    from signorini.studies.scene.discretise import discretise_stage
+    from signorini.studies.scene.norm import norms_stage
+    from signorini.studies.scene.solve import solve_stage
+    from signorini.studies.scene.store import SceneMesh
+    from signorini.studies.theory.quantities import quantities_stage
+
+    scene = _scene()
+    at = SceneMesh(scene["problem"], N, scene.get("diagonal", "sw_ne"))
+    d = workdir / f"N{N}"
+    d.mkdir(parents=True, exist_ok=True)
+    conventions = scene.get("conventions", {})
+    solution = d / "solution_multigrid.npz"
+    t0 = time.perf_counter()
+    if stage == "discretise":
+        discretise_stage(at, d / "system.npz", d / "system.json")
+    elif stage in ROUTES:
+        name = stage.removeprefix("solve_")
+        solve_stage(at, d / "system.npz", ROUTES[stage], d / f"solution_{name}.npz", d / f"solution_{name}.json")
+    elif stage == "convention_norms":
+        names = [n for n in scene["norms"] if not parse_norm_name(n).true]
+        norms_stage(at, solution, {n: d / f"{n}.json" for n in names}, conventions)
+    elif stage in TRUE_NORMS:
+        norms_stage(at, solution, {stage: d / f"{stage}.json"}, conventions)
+    elif stage == "theory_quantities":
+        quantities_stage(at, solution, d / "theory.json")
+    else:
+        raise ValueError(f"unknown stage {stage}")
+    seconds = time.perf_counter() - t0
+    rss_gib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20  # kB on Linux
+    print(json.dumps({"seconds": seconds, "peak_rss_gib": rss_gib}))
+
+
+def _direct_fits(N: int) -> str | None:
+    """Why the direct route is not run at N (its predicted memory exceeds the machine's), or None."""
+    from signorini.pipeline.resources import machine_mem_mb, mem_mb
+
+    need, have = mem_mb("solve", N), machine_mem_mb()
+    return None if need <= 0.9 * have else f"predicted {need / 1024:.1f} GiB > 90 % of {have / 1024:.1f} GiB"
+
+
+def _child(stage: str, N: int, workdir: Path, timeout_s: float) -> dict:
+    load0 = os.getloadavg()[0]
+    cmd = [sys.executable, __file__, "--child", stage, "--N", str(N), "--workdir", str(workdir)]
+    try:
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout_s, cwd=ROOT)
+    except subprocess.TimeoutExpired:
+        return {"skipped": f"longer than {timeout_s:g} s", "load1": [load0, os.getloadavg()[0]]}
+    if proc.returncode != 0:
+        return {"failed": proc.stderr.strip().splitlines()[-1:], "load1": [load0, os.getloadavg()[0]]}
+    out = json.loads(proc.stdout.strip().splitlines()[-1])
+    return out | {"load1": [load0, os.getloadavg()[0]]}
+
+
+def exponents(stages: dict, unknowns: dict[int, int]) -> dict[str, dict[str, float]]:
+    """p of time ∝ unknowns^p between successive measured N of every stage."""
+    out: dict[str, dict[str, float]] = {}
+    for stage, by_N in stages.items():
+        Ns = sorted(int(N) for N, rec in by_N.items() if "seconds" in rec)
+        seconds = {N: by_N[str(N)]["seconds"] for N in Ns}
+        out[stage] = {
+            f"{a}-{b}": math.log(seconds[b] / seconds[a]) / math.log(unknowns[b] / unknowns[a])
+            for a, b in zip(Ns, Ns[1:], strict=False)
+        }
+    return out
+
+
+def measure(Ns: list[int], stages: list[str], workdir: Path, timeout_s: float) -> dict:
+    records: dict[str, dict[str, dict]] = {stage: {} for stage in stages}
+    for N in Ns:
+        for stage in stages:
+            if stage == "solve_direct" and (why := _direct_fits(N)):
+                records[stage][str(N)] = {"skipped": why}
+            else:
+                records[stage][str(N)] = _child(stage, N, workdir, timeout_s)
+            print(f"N={N} {stage}: {records[stage][str(N)]}", file=sys.stderr, flush=True)
+    unknowns = {N: (N + 1) ** 2 for N in Ns}
+    out = {"N": Ns, "unknowns": unknowns, "stages": records, "exponents": exponents(records, unknowns)}
+    direct, multigrid = (records.get(s, {}).get("2001", {}).get("seconds") for s in ROUTES)
+    out["solve_speedup_over_direct_N2001"] = direct / multigrid if direct and multigrid else None
+    at_4001 = [rec["peak_rss_gib"] for rec in (r.get("4001", {}) for r in records.values()) if "peak_rss_gib" in rec]
+    out["peak_rss_gib_N4001"] = max(at_4001) if at_4001 else None
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--N", type=int, nargs="+", default=[501, 1001, 2001, 4001])
+    parser.add_argument(
+        "--stages",
+        nargs="+",
+        default=["discretise", *ROUTES, "convention_norms", *TRUE_NORMS, "theory_quantities"],
+    )
+    parser.add_argument("--workdir", type=Path, default=ROOT / "results/benchmarks/scale")
+    parser.add_argument("--timeout", type=float, default=3600.0, help="per stage, seconds")
+    parser.add_argument("--out", type=Path, default=ROOT / "docs/evidence/scale.json")
+    parser.add_argument("--child", help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    from signorini.pipeline.jobenv import single_threaded
+
+    single_threaded()  # before numpy loads its BLAS, in this process and its children
+    if args.child:
+        run_stage(args.child, args.N[0], args.workdir)
+        return 0
+    t0 = time.time()
+    out = {"date": time.strftime("%Y-%m-%d %H:%M"), "cores": os.cpu_count()}
+    out |= measure(args.N, args.stages, args.workdir, args.timeout)
+    out["wall_s"] = time.time() - t0
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
+    print(f"wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
