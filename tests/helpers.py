@@ -17,9 +17,9 @@ from pathlib import Path
 
 import meshio
 import numpy as np
-import yaml
 
 from signorini.paper import PAPER_NORMS
+from signorini.pipeline.config import load_config
 from signorini.pipeline.paths import PEER_DRIVER
 from signorini.studies.scene.discretise import discretise_stage
 from signorini.studies.scene.solve import solve_stage
@@ -212,8 +212,9 @@ def read_vtu(path) -> dict[str, np.ndarray]:
 
 
 def smoke_config(N: list[int]) -> dict:
-    """The shipped config's smoke scene alone, on the meshes ``N``, rendered by the paper's outputs."""
-    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    """The shipped config's smoke scene alone (its scene defaults filled in), on the meshes ``N``,
+    rendered by the paper's outputs."""
+    config = load_config(ROOT / "workflow/config.yaml")
     return {"figures_scene": "smoke", "scenes": {"smoke": {**config["scenes"]["smoke"], "N": N}}}
 
 

@@ -4,7 +4,7 @@ petsc4py is missing, and (marker ``peers``) a smoke run of every configured peer
 
 The smoke tests need petsc4py under the peer interpreter (``/usr/bin/python3``; Debian:
 ``make setup-peers``) and skip without it -- unless ``SIGNORINI_REQUIRE_PEERS=1`` (set by
-``.ci/peers``), where its absence fails them.
+``.ci/run`` where ``.ci/peers`` installed them), where its absence fails them.
 """
 
 from __future__ import annotations
