@@ -121,7 +121,7 @@ def test_artifacts_follow_the_umask(tmp_path):
     ],
 )
 def test_a_mesh_that_cannot_fit_is_refused_before_any_job(N, limit, message):
-    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config = load_config(ROOT / "workflow/config.yaml")
     config = {"figures_scene": "smoke", "scenes": {"smoke": {**config["scenes"]["smoke"], "N": [11, N]}}}
     with pytest.raises(ConfigError, match=message):
         check_config(config, limit)
@@ -145,7 +145,7 @@ def test_a_mesh_that_cannot_fit_is_refused_before_any_job(N, limit, message):
 def test_unknown_or_mistyped_solver_options_are_refused(solver, options, message):
     """Named before any job runs (they used to fail inside the solve job, after assembly, with an
     unnamed TypeError); valid options of the same route pass."""
-    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config = load_config(ROOT / "workflow/config.yaml")
     config["scenes"]["smoke"].update(solver=solver, solver_options=options)
     with pytest.raises(ConfigError, match=f"scenes.smoke.{message}"):
         check_config(config)
@@ -166,7 +166,7 @@ def test_mistyped_options_of_a_study_or_atlas_column_are_refused():
     study = {"configs": {"osqp": {"solver": "OSQP", "options": {"polishing": "no"}}}}
     with pytest.raises(StudyConfigError, match="study.configs.osqp.options.polishing: 'no' is not of type int"):
         study_configs(study)
-    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config = load_config(ROOT / "workflow/config.yaml")
     config["scenes"]["stability"]["atlas"]["solvers"]["scs"]["options"]["time_limit"] = 60
     with pytest.raises(AtlasConfigError, match="atlas.solvers.scs.options.time_limit: not an option of cvxpy_solve"):
         check_atlases(config)

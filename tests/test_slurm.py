@@ -17,7 +17,7 @@ import pytest
 import yaml
 from helpers import ROOT, copy_repo, snakemake
 
-from signorini.pipeline.config import ConfigError, check_config
+from signorini.pipeline.config import ConfigError, check_config, load_config
 from signorini.pipeline.resources import (
     MEM_MB,
     NodeLimits,
@@ -51,7 +51,7 @@ def test_the_largest_node_of_the_default_partition_is_the_limit():
 
 
 def _smoke_config(N: list[int]) -> dict:
-    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config = load_config(ROOT / "workflow/config.yaml")
     return {"figures_scene": "smoke", "scenes": {"smoke": {**config["scenes"]["smoke"], "N": N}}}
 
 

@@ -13,7 +13,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.sparse as sp
-import yaml
 
 from signorini.fem.discrete import build
 from signorini.fem.norms import evaluate_norms
@@ -25,6 +24,7 @@ from signorini.fem.problem import (
     make_problem,
 )
 from signorini.fem.solve import solve_discrete
+from signorini.pipeline.config import load_config
 from signorini.solvers import BadInputError, NotConvergedError, active_set_solve, cvxpy_solve, kkt_certificate
 from signorini.solvers.certificate import Certificate
 from signorini.solvers.linalg import is_positive_definite
@@ -323,7 +323,7 @@ def test_run_isolated_reports_every_outcome():
 
 
 def test_run_case_classifies_and_never_raises():
-    scene = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())["scenes"]["stability"]
+    scene = load_config(ROOT / "workflow/config.yaml")["scenes"]["stability"]
     atlas = stab_atlas.parse_atlas(scene)
     atlas = stab_atlas.Atlas(
         (
@@ -353,7 +353,7 @@ def test_run_case_classifies_and_never_raises():
 
 
 def test_shipped_atlas_parses_and_every_case_builds():
-    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config = load_config(ROOT / "workflow/config.yaml")
     atlas = stab_atlas.scene_atlas(config, "stability")
     assert {c.group for c in atlas.cases} == set(stab_atlas.GROUPS)
     for case in atlas.cases:
@@ -370,7 +370,7 @@ def test_the_multigrid_column_is_measured_like_the_direct_one():
     a case the same contact set and u as the direct route's column."""
     from signorini.fem.norms import evaluate_norms
 
-    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config = load_config(ROOT / "workflow/config.yaml")
     atlas = stab_atlas.scene_atlas(config, "stability")
     spec = atlas.solvers["multigrid"]
     assert spec.solver == "multigrid" and spec.kkt_tol == 1e-10
