@@ -87,7 +87,7 @@ def _child(stage: str, N: int, workdir: Path, timeout_s: float) -> dict:
     load0 = os.getloadavg()[0]
     cmd = [sys.executable, __file__, "--child", stage, "--N", str(N), "--workdir", str(workdir)]
     try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout_s, cwd=ROOT)
+        proc = subprocess.run(cmd, capture_output=True, text=True, encoding="utf-8", timeout=timeout_s, cwd=ROOT)
     except subprocess.TimeoutExpired:
         return {"skipped": f"longer than {timeout_s:g} s", "load1": [load0, os.getloadavg()[0]]}
     if proc.returncode != 0:

@@ -45,7 +45,7 @@ MODULE = "src/signorini/fem/true_norms.py"
 
 
 def load_avg() -> list[float]:
-    return [float(x) for x in Path("/proc/loadavg").read_text().split()[:3]]
+    return [float(x) for x in Path("/proc/loadavg").read_text(encoding="utf-8").split()[:3]]
 
 
 def solution(N: int) -> np.ndarray:
@@ -66,7 +66,11 @@ def module(which: str, baseline: str):
 
         return new
     source = subprocess.run(
-        ["git", "-C", str(ROOT), "show", f"{baseline}:{MODULE}"], check=True, capture_output=True, text=True
+        ["git", "-C", str(ROOT), "show", f"{baseline}:{MODULE}"],
+        check=True,
+        capture_output=True,
+        text=True,
+        encoding="utf-8",
     ).stdout
     spec = importlib.util.spec_from_loader("old_true_norms", loader=None)
     old = importlib.util.module_from_spec(spec)
@@ -127,7 +131,7 @@ def measure(N: int, names: list[str], which: str, baseline: str, interpolant: bo
 def merge(path: Path, rows: list[dict]) -> dict:
     """The rows merged into the JSON at ``path`` (a row replaces the one of the same N, norm, variant),
     with the relative differences of the new values to the old ones where both are there."""
-    data = json.loads(path.read_text()) if path.exists() else {"rows": []}
+    data = json.loads(path.read_text(encoding="utf-8")) if path.exists() else {"rows": []}
     key = lambda r: (r["N"], r["norm"], r["variant"])  # noqa: E731
     table = {key(r): r for r in data["rows"]}
     table.update({key(r): r for r in rows})
