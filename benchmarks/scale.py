@@ -109,7 +109,9 @@ def exponents(stages: dict, unknowns: dict[int, int]) -> dict[str, dict[str, flo
     return out
 
 
-def measure(Ns: list[int], stages: list[str], workdir: Path, timeout_s: float) -> dict:
+def measure(Ns: list[int], stages: list[str], workdir: Path, timeout_s: float, save=None) -> dict:
+    """Every stage at every N, coarse to fine; ``save(summary)`` after each stage (a run cut
+    short leaves what it measured)."""
     records: dict[str, dict[str, dict]] = {stage: {} for stage in stages}
     for N in Ns:
         for stage in stages:
@@ -118,6 +120,12 @@ def measure(Ns: list[int], stages: list[str], workdir: Path, timeout_s: float) -
             else:
                 records[stage][str(N)] = _child(stage, N, workdir, timeout_s)
             print(f"N={N} {stage}: {records[stage][str(N)]}", file=sys.stderr, flush=True)
+            if save:
+                save(summarise(Ns, records))
+    return summarise(Ns, records)
+
+
+def summarise(Ns: list[int], records: dict) -> dict:
     unknowns = {N: (N + 1) ** 2 for N in Ns}
     out = {"N": Ns, "unknowns": unknowns, "stages": records, "exponents": exponents(records, unknowns)}
     direct, multigrid = (records.get(s, {}).get("2001", {}).get("seconds") for s in ROUTES)
@@ -147,11 +155,14 @@ def main(argv: list[str] | None = None) -> int:
         run_stage(args.child, args.N[0], args.workdir)
         return 0
     t0 = time.time()
-    out = {"date": time.strftime("%Y-%m-%d %H:%M"), "cores": os.cpu_count()}
-    out |= measure(args.N, args.stages, args.workdir, args.timeout)
-    out["wall_s"] = time.time() - t0
+    head = {"date": time.strftime("%Y-%m-%d %H:%M"), "cores": os.cpu_count()}
     args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
+
+    def save(summary: dict, complete: bool = False) -> None:
+        out = head | summary | {"wall_s": time.time() - t0, "complete": complete}
+        args.out.write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
+
+    save(measure(args.N, args.stages, args.workdir, args.timeout, save), complete=True)
     print(f"wrote {args.out}")
     return 0
 

@@ -15,7 +15,8 @@ import pytest
 from scipy.integrate import quad
 from scipy.optimize import minimize_scalar
 
-from signorini.fem.boundary import boundary_rule
+from signorini.fem.boundary import boundary_rule, singular_points
+from signorini.fem.derivatives import ManufacturedBounds, derivative_bounds, u_and_grad_u
 from signorini.fem.discrete import build
 from signorini.fem.mesh import friedrichs_keller
 from signorini.fem.norm_names import UnknownNormError, parse_norm_name, true_name
@@ -386,3 +387,309 @@ def test_true_norms_target_renders_every_norm_of_table_2(built_repo):
     t2 = pd.read_csv(built_repo / "paper_figures/table2_true.csv")
     assert list(t2.columns) == ["h", *(true_name(n) for n in TABLE2_NORMS)]
     assert "## Gap per norm" in (built_repo / "paper_figures/table1_true.md").read_text()
+
+
+# --- the bounds that let the maxima exclude triangles ------------------------------------------
+
+
+class BoundedHarmonic(Harmonic):
+    """ũ with the bounds of its derivatives: ‖D²ũ‖₂ = (3/4) r^{-1/2}, ∇ũ Hölder-1/2 with H = 3/2."""
+
+    def hessian_bound(self, r_lo, r_hi):
+        with np.errstate(divide="ignore"):
+            return 0.75 / np.sqrt(np.asarray(r_lo, dtype=float))
+
+    def gradient_holder_bound(self, r_hi):
+        return np.full(np.shape(r_hi), 1.5)
+
+
+class Understated:
+    """A problem that states ``factor`` times its bounds (too small ones for factor < 1)."""
+
+    def __init__(self, base, factor: float):
+        self.base, self.factor = base, factor
+
+    def u(self, x):
+        return self.base.u(x)
+
+    def grad_u(self, x):
+        return self.base.grad_u(x)
+
+    def singular_points(self):
+        return self.base.singular_points()
+
+    def hessian_bound(self, r_lo, r_hi):
+        return self.factor * derivative_bounds(self.base).hessian_bound(r_lo, r_hi)
+
+    def gradient_holder_bound(self, r_hi):
+        return self.factor * derivative_bounds(self.base).gradient_holder_bound(r_hi)
+
+
+def _hessian_norm(problem, x: np.ndarray, step: np.ndarray) -> np.ndarray:
+    """‖D²u‖₂ at the points x (2, K) by central differences of ∇u (steps (K,), symmetrised)."""
+    cols, zero = [], np.zeros_like(step)
+    for d in (np.stack([step, zero]), np.stack([zero, step])):
+        cols.append((problem.grad_u(x + d) - problem.grad_u(x - d)) / (2.0 * step))
+    H = np.stack(cols, axis=1)  # H[i, j] = ∂_j ∂_i u
+    H = 0.5 * (H + H.transpose(1, 0, 2))
+    return np.max(np.abs(np.linalg.eigvalsh(H.transpose(2, 0, 1))), axis=1)
+
+
+def test_the_manufactured_solution_bounds_its_second_derivatives_tightly_near_the_free_point(rng):
+    """``hessian_bound(r, r) ≥ ‖D²u‖₂`` at points of every distance r from the free point (by
+    central differences, step ≪ r), within 10 % of it near the free point: a bound understated
+    by 10 % fails there."""
+    problem = Problem()
+    bounds = ManufacturedBounds(problem)
+    r = np.concatenate([np.geomspace(1e-5, 0.44, 400), np.linspace(0.44, 0.6, 100)])
+    th = rng.uniform(0.0, np.pi, r.size)
+    x = np.array([problem.x0 + r * np.cos(th), r * np.sin(th)])
+    x[1] = np.maximum(x[1], 1e-3 * r)  # inside Ω, so the differences stay on one side of the bottom edge
+    r = np.hypot(x[0] - problem.x0, x[1])
+    exact = _hessian_norm(problem, x, 1e-4 * r)
+    bound = bounds.hessian_bound(0.999 * r, 1.001 * r)
+    assert np.all(exact[bound == 0.0] == 0.0) and (bound == 0.0).sum() > 50  # beyond the cut-off
+    ratio = exact[bound > 0.0] / bound[bound > 0.0]
+    assert ratio.max() <= 1.0
+    assert ratio[r[bound > 0.0] < 1e-3].max() > 0.9
+    assert np.all(bounds.hessian_bound(np.array([0.45, 0.7]), np.array([0.5, 0.9])) == 0.0)  # u ≡ 0 beyond R
+    assert bounds.hessian_bound(np.array([0.0]), np.array([0.1]))[0] == np.inf
+
+
+def test_the_manufactured_gradient_is_holder_continuous_with_the_stated_constant(rng):
+    """|∇u(x) − ∇u(y)| ≤ H(r_hi) |x − y|^{1/2} on random pairs around the free point, nearly an
+    equality for pairs along the bottom edge through it."""
+    problem = Problem()
+    bounds, worst = ManufacturedBounds(problem), 0.0
+    for r_hi in (1e-6, 1e-3, 0.05, 0.3, 0.6):
+        rad, th = r_hi * np.sqrt(rng.uniform(0, 1, (2, 4000))), rng.uniform(0.0, np.pi, (2, 4000))
+        x = np.array([problem.x0 + rad[0] * np.cos(th[0]), rad[0] * np.sin(th[0])])
+        y = np.array([problem.x0 + rad[1] * np.cos(th[1]), rad[1] * np.sin(th[1])])
+        y[:, :200] = [[problem.x0] * 200, [0.0] * 200]  # pairs with the free point itself
+        x[:, :100] = [problem.x0 - rad[0, :100], np.zeros(100)]  # and along the bottom edge
+        quotient = np.hypot(*(problem.grad_u(x) - problem.grad_u(y))) / np.hypot(*(x - y)) ** 0.5
+        ratio = quotient / bounds.gradient_holder_bound(r_hi)
+        assert ratio.max() <= 1.0
+        worst = max(worst, ratio.max())
+    assert worst > 0.9
+
+
+def test_u_and_its_gradient_in_one_evaluation_are_bit_for_bit_the_two(rng):
+    problem = Problem(x0=0.37, R=0.3, A=3.0)
+    x = rng.uniform(0.0, 1.0, (2, 50, 7))
+    value, grad = u_and_grad_u(problem, x)
+    assert value.tobytes() == problem.u(x).tobytes() and grad.tobytes() == problem.grad_u(x).tobytes()
+    value, grad = u_and_grad_u(Harmonic(), x)  # any other problem: its two methods
+    assert np.array_equal(value, Harmonic().u(x)) and np.array_equal(grad, Harmonic().grad_u(x))
+    assert derivative_bounds(Harmonic()) is None and derivative_bounds(BoundedHarmonic()) is not None
+
+
+def _pieces(apex: np.ndarray) -> np.ndarray:
+    """Triangles (2, 3, K) of Ω̄ around ``apex``: right-angled (both diagonals) and obtuse, of three
+    sizes, with the apex as a vertex, on an edge, near and far; and across the cut-off r = R."""
+    out = []
+    for h in (1e-3, 1e-2, 5e-2):
+        for sx, sy in ((0, 0), (-0.5, 0), (-1, 0), (0.3, 0.2), (2, 0), (-3, 0), (0, 3), (-5, 1), (8, 8)):
+            b = apex + h * np.array([sx, sy])
+            out += [[b, b + (h, 0), b + (0, h)], [b, b + (h, 0), b + (h, h)], [b, b + (2 * h, 0), b + (h, 0.3 * h)]]
+    for r in (0.43, 0.449, 0.46):
+        b = apex + (r, 0.0)
+        out += [[b, b + (0.02, 0), b + (0, 0.02)], [b - (0.01, 0), b + (0.01, 0.0), b + (0, 0.01)]]
+    return np.array(out).transpose(2, 1, 0)
+
+
+KINDS = {
+    "|e|": ("value", lambda e, de: np.abs(e)),
+    "|∂₁e|": ("gradient", lambda e, de: np.abs(de[0])),
+    "|∂₂e|": ("gradient", lambda e, de: np.abs(de[1])),
+    "|∇e|": ("gradient", lambda e, de: np.hypot(de[0], de[1])),
+}
+
+
+def _bound_ratios(problem, apex) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]], bool]:
+    """Per function: (sup over each piece − its vertex maximum) / (the increment ``_increments``), the
+    sup on a lattice of 80 subdivisions, u_h the linear interpolant of u on each piece (e = 0 at the
+    vertices), and which pieces touch the apex; and whether the bound of every piece sampled on
+    its lattice (``_piece_bounds``) is above the sup."""
+    from skfem import MeshTri
+
+    from signorini.fem import true_norms as tn
+
+    v = _pieces(apex)
+    K = v.shape[2]
+    mesh = MeshTri(v.transpose(0, 2, 1).reshape(2, -1), np.arange(3 * K).reshape(K, 3).T)
+    u_h, every = problem.u(mesh.p), np.arange(K)
+    aff = tn._Affine.of(mesh, u_h, every)
+    e, de = aff.error(problem, tn._physical(aff, tn._lattice(80)), True)
+    ev, dev = aff.error(problem, v.transpose(0, 2, 1), True)  # at the vertices
+    increments, touching = tn._increments(problem, v, v), tn._radii(problem, v)[0] == 0
+    out, lattice_ok = {}, True
+    for name, (kind, f) in KINDS.items():
+        sup = f(e, de).max(axis=1)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            out[name] = (np.nan_to_num((sup - f(ev, dev).max(axis=1)) / increments[kind]), touching)
+        lattice_ok &= bool(np.all(sup <= tn._piece_bounds(problem, mesh, u_h, v, every, [f], [kind], True)[1]))
+    return out, lattice_ok
+
+
+@pytest.mark.parametrize("problem", [Problem(), BoundedHarmonic()], ids=["manufactured", "harmonic"])
+def test_the_bound_of_each_triangle_bounds_the_function_on_it(problem):
+    """On triangles near and far from the singular point, touching it (Hölder bound) or not
+    (Hessian bound): no sample of a lattice exceeds the bound, which the value |e| nearly reaches."""
+    ratios, lattice_ok = _bound_ratios(problem, singular_points(problem)[:, 0])
+    assert lattice_ok
+    for name, (ratio, touching) in ratios.items():
+        assert ratio.max() <= 1.0, name
+        assert touching.sum() >= 9
+    assert ratios["|e|"][0].max() > 0.7
+    assert ratios["|e|"][0][ratios["|e|"][1]].max() > 0.3  # the Hölder bound where D²u is unbounded
+
+
+def test_an_understated_bound_is_caught():
+    """The same check with bounds stated at half their value fails: on the triangles away from the
+    singular point (Hessian) and on those touching it (Hölder)."""
+    ratios, _ = _bound_ratios(Understated(Problem(), 0.5), np.array([0.5, 0.0]))
+    ratio, touching = ratios["|e|"]
+    assert ratio[~touching].max() > 1.0 and ratio[touching].max() > 0.6  # 0.5 · ratio > 0.3 above
+    ratios, _ = _bound_ratios(Understated(BoundedHarmonic(), 0.1), np.array([X0, 0.0]))
+    assert ratios["|e|"][0][ratios["|e|"][1]].max() > 1.0
+
+
+def test_the_interpolation_radius_is_the_largest_weighted_distance_to_the_vertices():
+    """max over the triangle of Σ λᵢ |x − vᵢ|² is ρ² (acute, right-angled and obtuse triangles)."""
+    from signorini.fem import true_norms as tn
+
+    v = np.array([[[0, 1, 0.4], [0, 0, 0.9]], [[0, 1, 0], [0, 0, 1]], [[0, 1, 0.5], [0, 0, 0.1]]], dtype=float)
+    v = v.transpose(1, 2, 0)  # (2, 3, 3)
+    X = tn._lattice(400)
+    lam = np.vstack([1.0 - X[0] - X[1], X[0], X[1]])  # (3, q)
+    x = np.einsum("dik,iq->dkq", v, lam)
+    weighted = np.einsum("iq,ikq->kq", lam, np.sum((x[:, None] - v[:, :, :, None]) ** 2, axis=0))
+    rho = tn._interpolation_radius(v)
+    assert np.all(weighted.max(axis=1) <= rho**2 * (1 + 1e-12))
+    assert weighted.max(axis=1) == pytest.approx(rho**2, rel=1e-4)
+
+
+@pytest.mark.parametrize("N", [21, 41])
+def test_pruned_maxima_equal_the_exhaustive_evaluation(cache, N):
+    """The branch and bound (every triangle sampled at its vertices, most excluded at once: all
+    beyond the cut-off, where e is affine) against
+    the lattice of every triangle with local maximisation: the same value to rtol, inside the
+    enclosure the branch and bound states."""
+    from signorini.fem.true_norms import _sampled_max_norm
+
+    mesh, u_h = cache.discrete({}, N).mesh, cache.solution({}, N).u
+    cases = [("Linf", Conventions()), ("Linfplus", Conventions()), ("Linfminus", Conventions())]
+    cases += [("W1inf", Conventions(w1p_form=form)) for form in ("components", "gradient", "seminorm")]
+    for name, conv in cases:
+        pruned = true_norm(Problem(), mesh, u_h, name + "_true", conv)
+        exhaustive = _sampled_max_norm(Problem(), mesh, u_h, parse_norm_name(name), conv, RTOL)
+        upper = pruned.levels[-1]["upper"]
+        assert pruned.converged and exhaustive.converged, name
+        assert pruned.value == pytest.approx(exhaustive.value, rel=RTOL), name
+        assert pruned.value <= upper and exhaustive.value <= upper * (1 + 1e-12), name
+        assert pruned.error_estimate == pytest.approx(upper - pruned.value, abs=1e-15)
+        first = pruned.levels[0]
+        assert first["sampled"] == mesh.t.shape[1] and first["kept"] + first["settled"] < first["sampled"] / 2, name
+
+
+@pytest.mark.parametrize("name", ["Linf", "W1inf"])
+def test_pruned_maxima_of_the_singular_function(name):
+    """ũ with its bounds: the enclosure of the branch and bound holds the maximum along ∂Ω."""
+    problem = BoundedHarmonic()
+
+    def f(x1, x2):
+        x = np.array([[x1], [x2]])
+        g = [np.abs(problem.u(x))] + ([np.abs(problem.grad_u(x)[k]) for k in (0, 1)] if name == "W1inf" else [])
+        return float(np.max(g))
+
+    mesh = friedrichs_keller(7)
+    result = true_norm(problem, mesh, np.zeros(mesh.p.shape[1]), name + "_true")
+    reference = _boundary_max(f)
+    assert result.converged
+    assert result.value <= reference * (1 + 1e-12) <= result.levels[-1]["upper"] * (1 + 1e-12)
+    assert result.value == pytest.approx(reference, rel=RTOL)
+
+
+# --- the integrals, triangle by triangle ---------------------------------------------------------
+
+
+def _uniform(problem, mesh, u_h, name: str, level: int, conv: Conventions) -> float:
+    """The norm with every triangle at the rule of ``level`` (``INTEGRAL_LEVELS``; the graded rule of
+    ``NEAR_LEVELS`` near the singular point), no closed form."""
+    from signorini.fem import true_norms as tn
+
+    spec = parse_norm_name(name)
+    plain, gradient = tn._integrand(spec, conv.w1p_form)
+    scale = tn._error_scale(problem, mesh, u_h, gradient)
+    near = tn._NearField.of(problem, mesh, u_h)
+
+    def integrand(e, de):
+        return plain(e / scale, None if de is None else de / scale)
+
+    every = np.arange(mesh.t.shape[1])
+    return (
+        float(tn._integrals(problem, mesh, u_h, integrand, gradient, (level,), every, near)[0].sum()) ** (1 / spec.p)
+        * scale
+    )
+
+
+LAST = 5  # the finest level: rules 20 (28 near the free point)
+
+
+@pytest.mark.parametrize("N", [21, 41])
+def test_integral_norms_agree_with_every_triangle_at_the_finest_rule(cache, N):
+    """The integrals triangle by triangle (most at the rule 5 or exactly) against every triangle at
+    the finest rule: the same value to rtol, with at most a tenth of the triangles at 14 or 20."""
+    mesh, u_h = cache.discrete({}, N).mesh, cache.solution({}, N).u
+    for name, conv in [("L4", Conventions()), ("L16", Conventions()), ("L4plus", Conventions()), ("H1", Conventions())]:
+        result = true_norm(Problem(), mesh, u_h, name + "_true", conv)
+        assert result.converged and result.value == pytest.approx(
+            _uniform(Problem(), mesh, u_h, name, LAST, conv), rel=RTOL
+        )
+    for form in ("components", "gradient", "seminorm"):
+        conv = Conventions(w1p_form=form)
+        result = true_norm(Problem(), mesh, u_h, "W116_true", conv)
+        assert result.converged and result.value == pytest.approx(
+            _uniform(Problem(), mesh, u_h, "W116", LAST, conv), rel=RTOL
+        )
+        counts = result.levels[-1]["elements_per_rule"]
+        near = result.levels[-1]["near_elements_per_rule"]
+        assert sum(counts.values()) + sum(near.values()) == mesh.t.shape[1]
+        assert counts["20"] + counts["14"] < mesh.t.shape[1] / 10
+
+
+def test_the_closed_form_where_u_is_affine_equals_a_rule_that_is_exact_there():
+    """Where u ≡ 0 (beyond the cut-off) e = −u_h is affine: ∫ e^p by the complete homogeneous
+    polynomial equals the 12 × 12 conical rule (degree 23 ≥ p) for every integrand with even p."""
+    from signorini.fem import true_norms as tn
+
+    problem, mesh = Problem(), friedrichs_keller(21)
+    u_h = np.random.default_rng(1).normal(size=mesh.p.shape[1]) * 0.1
+    v = mesh.p[:, mesh.t]
+    elements = np.flatnonzero(ManufacturedBounds(problem).hessian_bound(*tn._radii(problem, v)) == 0.0)
+    assert elements.size > mesh.t.shape[1] / 2
+    aff = tn._Affine.of(mesh, u_h, elements)
+    for name, form in [
+        ("L2", ""),
+        ("L4", ""),
+        ("L16", ""),
+        ("H1", ""),
+        ("W14", "components"),
+        ("W116", "gradient"),
+        ("W14", "seminorm"),
+    ]:
+        spec = parse_norm_name(name)
+        plain, gradient = tn._integrand(spec, form or "components")
+        exact = tn._affine_rule(spec, form or "components", plain, 0.5)(problem, aff)
+        rule = tn._rule_integrals(
+            problem,
+            aff,
+            lambda e, de, plain=plain: plain(e / 0.5, None if de is None else de / 0.5),
+            gradient,
+            12,
+            v[:, :, elements],
+        )
+        assert exact == pytest.approx(rule, rel=1e-12), name
+    assert tn._affine_rule(parse_norm_name("L4plus"), "components", None, 1.0) is None
+    assert tn._affine_rule(parse_norm_name("L3"), "components", None, 1.0) is None

@@ -227,7 +227,7 @@ def test_a_scene_whose_errors_vanish_is_rejected():
     ],
 )
 def test_a_mesh_that_cannot_fit_is_refused_before_any_job(N, limit, message):
-    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config = load_config(ROOT / "workflow/config.yaml")
     config = {"figures_scene": "smoke", "scenes": {"smoke": {**config["scenes"]["smoke"], "N": [11, N]}}}
     with pytest.raises(ConfigError, match=message):
         check_config(config, limit)

@@ -6,10 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.sparse as sp
-import yaml
 from helpers import ROOT
 
-from signorini.pipeline.config import ConfigError, check_config
+from signorini.pipeline.config import ConfigError, check_config, load_config
 
 
 @pytest.mark.parametrize(
@@ -30,7 +29,7 @@ from signorini.pipeline.config import ConfigError, check_config
 def test_unknown_or_mistyped_solver_options_are_refused(solver, options, message):
     """Named before any job runs (they used to fail inside the solve job, after assembly, with an
     unnamed TypeError); valid options of the same route pass."""
-    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config = load_config(ROOT / "workflow/config.yaml")
     config["scenes"]["smoke"].update(solver=solver, solver_options=options)
     with pytest.raises(ConfigError, match=f"scenes.smoke.{message}"):
         check_config(config)

@@ -26,7 +26,7 @@ RUNTIME_MIN = {
     "discretise": (5, 200000),
     "solve": (5, 100000),  # the active-set steps grow with N: N = 1001 -> 2001 took 8x
     "norm": (5, 500000),
-    "true_norm": (5, 50000),  # a true norm refines its quadrature: about 20x a convention norm
+    "true_norm": (5, 250000),  # a true norm: at most about twice a convention norm (branch and bound, pruning)
     "theory_quantities": (5, 100000),
 }
 SCENE_RULES = ("discretise", "solve", "norm")  # the jobs every scene runs on each mesh

@@ -4,10 +4,10 @@ reference on N = 6, and a bad-input case, each solved by the exact solver."""
 from __future__ import annotations
 
 import pytest
-import yaml
 from helpers import ROOT
 
 from signorini.fem.problem import Problem
+from signorini.pipeline.config import load_config
 from signorini.studies.stability.atlas import Atlas, Case, parse_atlas
 from signorini.studies.stability.cases import run_case
 
@@ -17,7 +17,7 @@ NORMS = ("L4", "H12")
 @pytest.fixture(scope="session")
 def small_atlas():
     """(case infos, case arrays, norms) as the stage ``stability_case`` leaves them."""
-    scene = yaml.safe_load((ROOT / "workflow/config.yaml").read_text(encoding="utf-8"))["scenes"]["stability"]
+    scene = load_config(ROOT / "workflow/config.yaml")["scenes"]["stability"]
     solvers = parse_atlas(scene).solvers
     only = ("active_set",)
     cases = (

@@ -5,10 +5,10 @@ from __future__ import annotations
 import json
 
 import pytest
-import yaml
 from helpers import ROOT
 
 from signorini.fem.problem import Problem
+from signorini.pipeline.config import load_config
 from signorini.studies.stability import atlas as stab_atlas
 from signorini.studies.stability import cases as stab_cases
 
@@ -18,7 +18,7 @@ from signorini.studies.stability import cases as stab_cases
 
 
 def test_shipped_atlas_parses_and_every_case_builds():
-    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config = load_config(ROOT / "workflow/config.yaml")
     atlas = stab_atlas.scene_atlas(config, "stability")
     assert {c.group for c in atlas.cases} == set(stab_atlas.GROUPS)
     for case in atlas.cases:

@@ -9,12 +9,12 @@ import time
 
 import numpy as np
 import pytest
-import yaml
 from helpers import ROOT
 
 from signorini.fem.discrete import build
 from signorini.fem.problem import Problem, ProblemParameterError
 from signorini.fem.solve import solve_discrete
+from signorini.pipeline.config import load_config
 from signorini.solvers import BadInputError, cvxpy_solve
 from signorini.studies.stability import atlas as stab_atlas
 from signorini.studies.stability import cases as stab_cases
@@ -95,7 +95,7 @@ def test_run_isolated_reports_every_outcome():
 
 
 def test_run_case_classifies_and_never_raises():
-    scene = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())["scenes"]["stability"]
+    scene = load_config(ROOT / "workflow/config.yaml")["scenes"]["stability"]
     atlas = stab_atlas.parse_atlas(scene)
     atlas = stab_atlas.Atlas(
         (
@@ -124,7 +124,7 @@ def test_the_multigrid_column_is_measured_like_the_direct_one():
     a case the same contact set and u as the direct route's column."""
     from signorini.fem.norms import evaluate_norms
 
-    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config = load_config(ROOT / "workflow/config.yaml")
     atlas = stab_atlas.scene_atlas(config, "stability")
     spec = atlas.solvers["multigrid"]
     assert spec.solver == "multigrid" and spec.kkt_tol == 1e-10

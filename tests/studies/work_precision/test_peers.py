@@ -16,11 +16,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 from helpers import PEER_DRIVER_FILE as DRIVER
 from helpers import PROBLEM, ROOT, TEST_PEER_PYTHON
 
 from signorini.fem.discrete import DiscreteProblem
+from signorini.pipeline.config import load_config
 from signorini.studies.scene.discretise import discretise_stage
 from signorini.studies.scene.norm import norm_stage
 from signorini.studies.scene.solve import solve_stage
@@ -54,7 +54,7 @@ def petsc_probe() -> dict:
 
 def shipped_peers() -> dict[str, SolverConfig]:
     """The peer configurations of the shipped work-precision study."""
-    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config = load_config(ROOT / "workflow/config.yaml")
     configs = study_configs(config["scenes"]["work_precision"]["study"])
     return {k: c for k, c in configs.items() if c.peer and c.initial == "cold"}  # the _ws variants: same methods
 

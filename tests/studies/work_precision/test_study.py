@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import pytest
-import yaml
 from helpers import ROOT
 
+from signorini.pipeline.config import load_config
 from signorini.studies.work_precision.study import SolverConfig, study_configs
 
 
@@ -16,7 +16,7 @@ def test_mistyped_options_of_a_study_or_atlas_column_are_refused():
     study = {"configs": {"osqp": {"solver": "OSQP", "options": {"polishing": "no"}}}}
     with pytest.raises(StudyConfigError, match="study.configs.osqp.options.polishing: 'no' is not of type int"):
         study_configs(study)
-    config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text())
+    config = load_config(ROOT / "workflow/config.yaml")
     config["scenes"]["stability"]["atlas"]["solvers"]["scs"]["options"]["time_limit"] = 60
     with pytest.raises(AtlasConfigError, match="atlas.solvers.scs.options.time_limit: not an option of cvxpy_solve"):
         check_atlases(config)
