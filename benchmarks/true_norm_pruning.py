@@ -14,7 +14,7 @@ once per mesh by the ``auto`` route and kept in ``/tmp/wt-truenorms-uh<N>.npy``.
 records the wall and CPU time, the value, its estimated error, whether it converged, the levels
 and the load average (``/proc/loadavg``) before and after; the rows are merged into ``--out``
 (keyed by N, norm and variant), so the variants can be measured in separate runs.  One thread
-(``OMP_NUM_THREADS=1`` …).  ``--interpolant`` takes the nodal interpolant ``I_h u`` for ``u_h``
+(``signorini.pipeline.jobenv``).  ``--interpolant`` takes the nodal interpolant ``I_h u`` for ``u_h``
 instead (variant ``<which>-interpolant``: no solve, so meshes beyond the solver's reach on this
 machine, N = 4001, show how the levels scale).
 """
@@ -30,8 +30,9 @@ import sys
 import time
 from pathlib import Path
 
-for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-    os.environ.setdefault(_var, "1")
+from signorini.pipeline.jobenv import THREAD_VARIABLES, single_threaded
+
+single_threaded()  # before numpy loads its BLAS
 
 import numpy as np  # noqa: E402
 
@@ -157,7 +158,8 @@ def merge(path: Path, rows: list[dict]) -> dict:
                 }
             )
     data["comparison"] = sorted(comparison, key=lambda r: (r["N"], TABLE2_NORMS.index(r["norm"][:-5])))
-    data["machine"] = {"cpu_count": os.cpu_count(), "threads": os.environ.get("OMP_NUM_THREADS")}
+    threads = {name: os.environ.get(name) for name in THREAD_VARIABLES}
+    data["machine"] = {"cpu_count": os.cpu_count(), "threads": threads}
     data["problem"] = PROBLEM
     data["note"] = (
         "wall_s and cpu_s of one evaluation each, single thread, on a 2-core machine shared with another "
