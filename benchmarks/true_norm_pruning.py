@@ -13,8 +13,8 @@ conventions (``fem.norms.evaluate_norms``: fixed rules and point sets), the unit
 once per mesh by the ``auto`` route and kept in ``/tmp/wt-truenorms-uh<N>.npy``.  Each row
 records the wall and CPU time, the value, its estimated error, whether it converged, the levels
 and the load average (``/proc/loadavg``) before and after; the rows are merged into ``--out``
-(keyed by N, norm and variant), so the variants can be measured in separate runs.  One BLAS
-thread (``pipeline.jobenv``).  ``--interpolant`` takes the nodal interpolant ``I_h u`` for ``u_h``
+(keyed by N, norm and variant), so the variants can be measured in separate runs.  One thread
+(``signorini.pipeline.jobenv``).  ``--interpolant`` takes the nodal interpolant ``I_h u`` for ``u_h``
 instead (variant ``<which>-interpolant``: no solve, so meshes beyond the solver's reach on this
 machine, N = 4001, show how the levels scale).
 """
@@ -32,7 +32,7 @@ from pathlib import Path
 
 from signorini.pipeline.jobenv import THREAD_VARIABLES, single_threaded
 
-single_threaded()  # one BLAS thread, before numpy loads it
+single_threaded()  # before numpy loads its BLAS
 
 import numpy as np  # noqa: E402
 
@@ -158,7 +158,8 @@ def merge(path: Path, rows: list[dict]) -> dict:
                 }
             )
     data["comparison"] = sorted(comparison, key=lambda r: (r["N"], TABLE2_NORMS.index(r["norm"][:-5])))
-    data["machine"] = {"cpu_count": os.cpu_count(), "threads": os.environ.get(THREAD_VARIABLES[0])}
+    threads = {name: os.environ.get(name) for name in THREAD_VARIABLES}
+    data["machine"] = {"cpu_count": os.cpu_count(), "threads": threads}
     data["problem"] = PROBLEM
     data["note"] = (
         "wall_s and cpu_s of one evaluation each, single thread, on a 2-core machine shared with another "

@@ -294,17 +294,27 @@ def _boundary_max(f) -> float:
     return best
 
 
-@pytest.mark.parametrize("name", ["Linf", "W1inf"])
-def test_true_maxima_of_the_singular_function(name):
-    problem = Harmonic()
+def _pointwise(problem, name: str):
+    """(x1, x2) ↦ the function whose maximum the norm ``name`` (Linf, W1inf) of u − 0 is."""
 
     def f(x1, x2):
         x = np.array([[x1], [x2]])
         g = [np.abs(problem.u(x))] + ([np.abs(problem.grad_u(x)[k]) for k in (0, 1)] if name == "W1inf" else [])
         return float(np.max(g))
 
+    return f
+
+
+def _true_max_of_u(problem, name: str):
+    """The true norm ``name`` of u itself (u_h = 0) on the 7 × 7 mesh."""
     mesh = friedrichs_keller(7)
-    result = true_norm(problem, mesh, np.zeros(mesh.p.shape[1]), name + "_true")
+    return true_norm(problem, mesh, np.zeros(mesh.p.shape[1]), name + "_true")
+
+
+@pytest.mark.parametrize("name", ["Linf", "W1inf"])
+def test_true_maxima_of_the_singular_function(name):
+    problem = Harmonic()
+    f, result = _pointwise(problem, name), _true_max_of_u(problem, name)
     assert result.value == pytest.approx(_boundary_max(f), rel=1e-9)
 
 
@@ -598,13 +608,7 @@ def test_pruned_maxima_of_the_singular_function(name):
     """ũ with its bounds: the enclosure of the branch and bound holds the maximum along ∂Ω."""
     problem = BoundedHarmonic()
 
-    def f(x1, x2):
-        x = np.array([[x1], [x2]])
-        g = [np.abs(problem.u(x))] + ([np.abs(problem.grad_u(x)[k]) for k in (0, 1)] if name == "W1inf" else [])
-        return float(np.max(g))
-
-    mesh = friedrichs_keller(7)
-    result = true_norm(problem, mesh, np.zeros(mesh.p.shape[1]), name + "_true")
+    f, result = _pointwise(problem, name), _true_max_of_u(problem, name)
     reference = _boundary_max(f)
     assert result.converged
     assert result.value <= reference * (1 + 1e-12) <= result.levels[-1]["upper"] * (1 + 1e-12)
