@@ -87,7 +87,7 @@ def _env() -> dict[str, str]:
     """The driver's environment: one BLAS/OpenMP thread, like every job (no oversubscription)."""
     from signorini.pipeline.jobenv import single_threaded
 
-    return dict(single_threaded(dict(os.environ)))
+    return single_threaded(dict(os.environ))
 
 
 def _last_line(text: str) -> str:
