@@ -1,6 +1,6 @@
 """The environment the project's processes compute in, set in one place.
 
-One BLAS/OpenMP thread unless the caller says otherwise (``THREAD_VARIABLES`` already set are
+One BLAS/OpenMP/Rayon thread unless the caller says otherwise (``THREAD_VARIABLES`` already set are
 kept): jobs run side by side (``snakemake -c2``), and threaded BLAS inside the active-set loop
 oversubscribes the cores (5-20× slower on a loaded 2-core machine); a timed run then measures the
 CPU time of one core, as the PETSc peers' runs do.  It must be applied before numpy loads its BLAS:
@@ -14,7 +14,9 @@ from __future__ import annotations
 import os
 from collections.abc import MutableMapping
 
-THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+# RAYON: the thread pool of Clarabel's sparse factorisation (faer); without it a Clarabel call
+# ran 1.16 cores wide and 37 % slower in wall time at N = 201 on 2 cores
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "RAYON_NUM_THREADS")
 
 
 def single_threaded(environ: MutableMapping[str, str] | None = None) -> MutableMapping[str, str]:
