@@ -100,6 +100,7 @@ rule work_precision_report:
         "../envs/signorini.yaml"
     params:
         source=lambda wc: study_of(WP)["source"],
+        timing=lambda wc: study_of(WP).get("timing", {}),
     script:
         "../scripts/work_precision_report.py"
 

@@ -7,4 +7,5 @@ snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake):
     i = snakemake.input
-    report_stage(i.csv, i.paper_table1, i.paper_table2, snakemake.output.md, source=snakemake.params.source)
+    params = snakemake.params
+    report_stage(i.csv, i.paper_table1, i.paper_table2, snakemake.output.md, source=params.source, timing=params.timing)

@@ -54,7 +54,9 @@ def solver(machine: FakeMachine, seconds: float):
     return call
 
 
-FAST = timing.Protocol(min_repeats=3, max_repeats=5, spread=0.05, budget_s=100.0, retries=2, wait_s=5.0, poll_s=1.0)
+FAST = timing.Protocol(
+    min_repeats=3, max_repeats=5, spread=0.05, budget_s=100.0, retries=2, wait_s=5.0, poll_s=1.0, min_sample_s=0.0
+)
 
 
 def test_a_sample_under_a_load_above_the_cores_is_redone():
@@ -185,3 +187,41 @@ def test_protocol_from_mapping_and_the_reference_kernel():
     assert wall > 0 and cpu >= 0 and kernel.description.endswith("5 CSR products), n = 400")
     assert kernel.repeats == 50  # a small system's kernel is repeated up to 20 000 unknowns
     assert timing.spread([1.0, 1.1, 0.9]) == pytest.approx(0.2) and timing.spread([1.0]) == 0.0
+
+
+def test_a_short_call_is_batched_to_last_min_sample_s():
+    """The first run of a 0.2 s call decides 5 calls per later sample (``min_sample_s`` = 1 s);
+    the times stay per call.  A self-timed call is batched by its whole duration: a peer whose
+    solve takes 0.05 s but whose run lasts 1 s is run once per sample."""
+    protocol = timing.Protocol(**{**FAST.as_dict(), "min_sample_s": 1.0})
+    m, runs = FakeMachine(), []
+
+    def call():
+        runs.append(1)
+        m.work(0.2)
+        return "answer", None
+
+    measured = timing.Timer(protocol, m).measure(call, FakeKernel(m))
+    assert [s.calls for s in measured.samples] == [1, 5, 5] and len(runs) == 11
+    summary = measured.summary(protocol, 2)
+    assert summary["calls"] == 5 and summary["time_s"] == pytest.approx(0.2)
+    assert summary["time_ref"] == pytest.approx(2.0)
+
+    def peer():
+        m.work(1.0)
+        return "answer", (0.05, 0.05)
+
+    measured = timing.Timer(protocol, m).measure(peer, FakeKernel(m))
+    assert [s.calls for s in measured.samples] == [1, 1, 1]
+    assert measured.summary(protocol, 2)["time_s"] == pytest.approx(0.05)
+    assert protocol.calls_for(1e-9) == timing.MAX_CALLS
+
+
+def test_round_robin_batches_each_task_by_its_own_first_run():
+    protocol = timing.Protocol(**{**FAST.as_dict(), "min_sample_s": 1.0})
+    m = FakeMachine()
+    kernel = FakeKernel(m)
+    tasks = [timing.Task("short", solver(m, 0.25), kernel), timing.Task("long", solver(m, 2.0), kernel)]
+    timing.round_robin(timing.Timer(protocol, m), tasks)
+    assert [s.calls for s in tasks[0].samples] == [1, 4, 4] and [s.calls for s in tasks[1].samples] == [1, 1, 1]
+    assert timing.task_summary(timing.Timer(protocol, m), tasks[0])["time_s"] == pytest.approx(0.25)

@@ -345,12 +345,13 @@ def _protocol(df: pd.DataFrame) -> dict[str, Any]:
     def col(name: str) -> np.ndarray:
         return pd_numeric(timed, name)
 
-    runs, spread, share = col("time_runs"), col("spread"), col("cpu_share")
+    runs, spread, share, calls = col("time_runs"), col("spread"), col("cpu_share"), col("calls")
     return {
         "key": rank_key(df),
         "runs": int(np.isfinite(runs).sum()),
         "repeats_median": float(np.nanmedian(runs)) if np.isfinite(runs).any() else math.nan,
         "repeats_max": float(np.nanmax(runs)) if np.isfinite(runs).any() else math.nan,
+        "calls_max": float(np.nanmax(calls)) if np.isfinite(calls).any() else 1.0,
         "spread_median": float(np.nanmedian(spread)) if np.isfinite(spread).any() else math.nan,
         "rejected": int(np.nansum(col("rejected"))),
         "loaded": int(np.nansum(col("loaded"))),

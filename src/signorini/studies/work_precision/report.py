@@ -11,6 +11,7 @@ from collections.abc import Mapping, Sequence
 
 from signorini.formatting import fmt_rel, fmt_time, h_label, md_table, sci_md
 from signorini.paper import TABLE1_NORMS, label_md
+from signorini.studies.work_precision.timing import Protocol
 
 TIME_PROTOCOL = (
     "CPU time of one solver call (cvxpy's canonicalisation included; a PETSc peer: PETSc's `solve` in its driver, "
@@ -45,13 +46,16 @@ LOAD = (
 )
 PROTOCOL = (
     "- **Timing protocol** (`signorini.studies.work_precision.timing`). Each run's time is the median of repeated "
-    "calls (at least 3 that agree within 5 % in reference units, at most 7, no new call after 20 s; here "
-    "{repeats_median:.0f} per run, at most {repeats_max:.0f}; median spread {spread_median:.1%}). Every call is timed "
+    "samples (at least {min_repeats} that agree within {spread:.0%} in reference units, at most {max_repeats}, no new "
+    "sample after {budget_s:g} s; here {repeats_median:.0f} per run, at most {repeats_max:.0f}; median spread "
+    "{spread_median:.1%}); a call shorter than {min_sample_s:g} s is run often enough per sample to last that long "
+    "(up to {calls_max:.0f} calls). Every call is timed "
     "by its CPU time, which time sharing with other processes does not inflate (the median CPU share of the calls "
     "was {cpu_share_median:.2f}), and in *reference units*: over the CPU time of a fixed sparse kernel on the same "
     "matrix (a Cholesky factorisation and CSR products) timed immediately before and after it, which cancels a "
-    "slowdown of the whole machine (caches, memory bandwidth, clock). A call under a load above the cores or with a "
-    "CPU share below 0.9 was rejected and redone after a wait for the load to fall ({rejected} calls); {loaded} runs "
+    "slowdown of the whole machine (caches, memory bandwidth, clock). A call under a load above {max_load} or with a "
+    "CPU share below {min_cpu_share:g} was rejected and redone after a wait for the load to fall ({rejected} calls); "
+    "{loaded} runs "
     "kept a call under such a load after the last retry. Rankings and ratios below are in reference units, times "
     "in CPU seconds; the CSV also has the wall times (`wall_s`) and the loads of every run."
 )
@@ -80,7 +84,13 @@ COST = (
 )
 
 
-def _setup(df, found: Mapping, source: str) -> list[str]:
+def _protocol_settings(protocol: Protocol) -> dict:
+    """The protocol's parameters as the report's text states them."""
+    limit = "the cores" if protocol.max_load is None else f"{protocol.max_load:g}"
+    return {**protocol.as_dict(), "max_load": limit}
+
+
+def _setup(df, found: Mapping, source: str, protocol: Protocol) -> list[str]:
     tolerances = sorted({str(t) for t in df["tol_label"] if t not in ("default", "exact")}, key=float, reverse=True)
     lines = [
         SETUP.format(
@@ -94,8 +104,8 @@ def _setup(df, found: Mapping, source: str) -> list[str]:
     ]
     if found.get("load"):
         lines.append(LOAD.format(**found["load"]))
-    protocol = found.get("protocol", {})
-    lines.append(PROTOCOL.format(**protocol) if "runs" in protocol else PROTOCOL_OLD)
+    protocol, timing = found.get("protocol", {}), protocol
+    lines.append(PROTOCOL.format(**protocol, **_protocol_settings(timing)) if "runs" in protocol else PROTOCOL_OLD)
     if math.isfinite(found.get("span_s", math.nan)):
         lines.append(SPAN.format(span=found["span_s"] / 60, job=found["job_time_s"] / 60))
     return lines
@@ -386,11 +396,13 @@ def _failures(df) -> list[str]:
     return [*lines, md_table(["solver", "status", "tolerance at N", "reason"], _failure_rows(bad), align="l")]
 
 
-def work_precision_md(df, found: Mapping, source: str = "paper") -> str:
+def work_precision_md(df, found: Mapping, source: str = "paper", protocol: Protocol | None = None) -> str:
     """``work_precision.md`` from the measurement table ``df`` (``work_precision.csv``) and
-    ``findings.findings``; ``source``: the scene whose exact solutions were reused."""
+    ``findings.findings``; ``source``: the scene whose exact solutions were reused; ``protocol``:
+    the timing protocol they were measured under (default: its defaults)."""
     labels = dict(zip(df["config"], df["label"], strict=False))
-    lines = [HEADER, *_setup(df, found, source), "", "## Findings", "", *_brief(df, found, labels)]
+    setup = _setup(df, found, source, protocol or Protocol())
+    lines = [HEADER, *setup, "", "## Findings", "", *_brief(df, found, labels)]
     lines += _table1_digits(found) + _time_to_digits(df, found, labels) + _fair_table(found, labels)
     lines += _peer_tables(df, found) + _eoc_table(found)
     lines += _cost_table(found) + _failures(df)
@@ -404,9 +416,11 @@ def report_stage(
     out_md: str | os.PathLike,
     table1_norms: Sequence[str] | None = None,
     source: str = "paper",
+    timing: Mapping | None = None,
 ) -> dict:
     """Stage ``work_precision_report``: the findings (against the published Tables 1 and 2 in
-    ``workflow/reference/``) rendered into ``work_precision.md``."""
+    ``workflow/reference/``) rendered into ``work_precision.md``; ``timing``: the study's
+    ``timing`` block (the protocol of its measurements)."""
     from signorini.pipeline.artifacts import atomic_write_text
     from signorini.studies.paper.reference import by_mesh, read_table_csv
     from signorini.studies.work_precision.findings import findings
@@ -415,5 +429,5 @@ def report_stage(
     df = read_measurements(csv_path)
     p1, p2 = read_table_csv(paper_table1), read_table_csv(paper_table2)
     found = findings(df, table1_norms or TABLE1_NORMS, by_mesh(p1, "L4"), by_mesh(p2, "L4"))
-    atomic_write_text(out_md, work_precision_md(df, found, source))
+    atomic_write_text(out_md, work_precision_md(df, found, source, Protocol.from_mapping(timing)))
     return found

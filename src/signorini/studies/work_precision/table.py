@@ -34,6 +34,7 @@ ID_COLUMNS = [
     "cpu_share",
     "spread",
     "time_runs",
+    "calls",
     "rejected",
     "loaded",
     "time_stop",

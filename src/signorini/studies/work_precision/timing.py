@@ -18,7 +18,12 @@ What inflates a solver's wall time on a shared machine, and what this protocol d
    (after a bounded wait for the load to fall; in ``round_robin`` after the other tasks of the
    round), at most ``retries`` times per measurement; a sample accepted after the last retry
    says so (``loaded``).
-4. **Noise**: a measurement is repeated until ``min_repeats`` samples agree within ``spread``
+4. **Short calls**: a call whose first run took less than ``min_sample_s`` (wall time of the
+   whole call: a peer's includes its interpreter's start, which its own timer leaves out) is run
+   ``calls`` times in a row per later sample (as ``timeit`` does), enough to last
+   ``min_sample_s``; the sample's times are per call.  A 0.27 s call's single samples ranged
+   over ±35 % on a quiet machine (allocation, caches, clock), a batch's over a few per cent.
+5. **Noise**: a measurement is repeated until ``min_repeats`` samples agree within ``spread``
    (relative range of their reference-unit times), at most ``max_repeats`` times and no new
    sample after ``budget_s`` seconds (a call longer than that is timed once: it averages the
    load over its own duration).  The reported value is the median.
@@ -83,6 +88,13 @@ class Protocol:
     wait_s: float = 30.0  # longest wait for the load to fall before a redo
     poll_s: float = 2.0
     max_wait_total_s: float = 600.0  # all waits of one Timer together
+    min_sample_s: float = 1.0  # shorter calls are batched to last this long per sample
+
+    def calls_for(self, span_s: float) -> int:
+        """Calls per sample for a call that lasted ``span_s`` seconds (at most ``MAX_CALLS``)."""
+        if span_s >= self.min_sample_s:
+            return 1
+        return min(MAX_CALLS, math.ceil(self.min_sample_s / max(span_s, 1e-6) - 1e-9))
 
     @classmethod
     def from_mapping(cls, spec: Mapping | None) -> Protocol:
@@ -98,6 +110,7 @@ class Protocol:
         return asdict(self)
 
 
+MAX_CALLS = 100  # calls per sample, at most
 KERNEL_MIN_UNKNOWNS = 20_000  # a small system's kernel is repeated up to this many unknowns
 
 
@@ -140,8 +153,9 @@ class ReferenceKernel:
 
 @dataclass
 class Sample:
-    """One timed call: wall and CPU seconds, the reference kernel's CPU and wall seconds around
-    it (mean of before and after), the load before/after, and whether it was rejected."""
+    """One timed batch of ``calls`` calls: wall and CPU seconds per call, the reference kernel's CPU
+    and wall seconds around it (mean of before and after), the load before/after, and whether it
+    was rejected."""
 
     wall_s: float
     cpu_s: float
@@ -150,6 +164,8 @@ class Sample:
     load_before: float
     load_after: float
     rejected: str = ""
+    calls: int = 1
+    span_s: float = math.nan  # wall seconds of one whole call, the callee's own overhead included
 
     @property
     def load(self) -> float:
@@ -216,6 +232,7 @@ class Measurement:
             "load1": statistics.median(x.load for x in s),
             "load1_max": max(x.load for x in s),
             "time_stop": self.stop,
+            "calls": max(x.calls for x in s),
             "waited_s": self.waited_s,
             "times": " ".join(f"{x.cpu_s:.6g}" for x in s),
         }
@@ -263,18 +280,27 @@ class Timer:
             return f"CPU share {s.cpu_share:.2f} < {self.protocol.min_cpu_share:g}"
         return ""
 
-    def sample(self, call: Callable[[], Timed], kernel: ReferenceKernel, ref_before: tuple[float, float]):
-        """One call bracketed by the kernel: (result, Sample, the kernel's time after it)."""
+    def sample(
+        self, call: Callable[[], Timed], kernel: ReferenceKernel, ref_before: tuple[float, float], calls: int = 1
+    ):
+        """``calls`` calls in a row bracketed by the kernel: (the last result, Sample, the kernel's
+        time after it)."""
         m = self.machine
         load_before = m.load()
-        w0, c0 = m.wall(), m.cpu()
-        result, own = call()
-        w1, c1 = m.wall(), m.cpu()
+        wall_s = cpu_s = 0.0
+        started = m.wall()
+        for _ in range(calls):
+            w0, c0 = m.wall(), m.cpu()
+            result, own = call()
+            w1, c1 = m.wall(), m.cpu()
+            own_wall, own_cpu = own if own is not None else (w1 - w0, c1 - c0)
+            wall_s, cpu_s = wall_s + own_wall, cpu_s + own_cpu
+        span_s = (m.wall() - started) / calls
         load_after = m.load()
         ref_after = kernel.run()
-        wall_s, cpu_s = own if own is not None else (w1 - w0, c1 - c0)
         ref_wall, ref_cpu = (ref_before[0] + ref_after[0]) / 2, (ref_before[1] + ref_after[1]) / 2
-        s = Sample(float(wall_s), float(cpu_s), ref_cpu, ref_wall, load_before, load_after)
+        per_call = (float(wall_s) / calls, float(cpu_s) / calls)
+        s = Sample(*per_call, ref_cpu, ref_wall, load_before, load_after, calls=calls, span_s=span_s)
         s.rejected = self.rejection(s)
         return result, s, ref_after
 
@@ -296,14 +322,15 @@ class Timer:
         rejected: list[Sample] = []
         started, waited0 = m.wall(), self.waited_s
         ref = kernel.run()
-        result, stop = None, ""
+        result, stop, calls = None, "", 0
         while not stop:
             self.wait_for_quiet()
             t0 = m.wall()
             try:
-                result, s, ref = self.sample(call, kernel, ref)
+                result, s, ref = self.sample(call, kernel, ref, max(calls, 1))
             except Exception as err:  # the caller classifies the failure
                 raise CallFailed(err, m.wall() - t0, samples) from err
+            calls = calls or p.calls_for(s.span_s)  # decided by the first call
             if s.rejected and len(rejected) < p.retries and accept(result):
                 rejected.append(s)
                 continue
@@ -325,6 +352,7 @@ class Task:
     ref: tuple[float, float] | None = None
     stop: str = ""
     accept: Callable[[Any], bool] = lambda result: True  # False: a failed answer, not repeated
+    calls: int = 0  # per sample; 0: one, then decided by the first call
 
 
 def round_robin(timer: Timer, tasks: Sequence[Task], on_sample: Callable[[Task, Sample], None] | None = None):
@@ -344,7 +372,8 @@ def round_robin(timer: Timer, tasks: Sequence[Task], on_sample: Callable[[Task, 
             if t.ref is None:
                 t.ref = t.kernel.run()
             t0 = m.wall()
-            t.result, s, t.ref = timer.sample(t.call, t.kernel, t.ref)
+            t.result, s, t.ref = timer.sample(t.call, t.kernel, t.ref, max(t.calls, 1))
+            t.calls = t.calls or p.calls_for(s.span_s)
             budget[t.name] += m.wall() - t0
             if on_sample is not None:
                 on_sample(t, s)
