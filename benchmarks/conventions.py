@@ -22,7 +22,15 @@ import numpy as np
 import pandas as pd
 
 from signorini.fem.discrete import build
-from signorini.fem.norms import H12_FORMS, MAX_POINTS, QUADRATURES, W1P_FORMS, Conventions, error_field, parse_norm
+from signorini.fem.norms.conventional import (
+    H12_FORMS,
+    MAX_POINTS,
+    QUADRATURES,
+    W1P_FORMS,
+    Conventions,
+    error_field,
+    parse_norm,
+)
 from signorini.fem.problem import Problem
 from signorini.fem.solve import solve_discrete
 from signorini.pipeline.artifacts import load_npz, save_npz

@@ -43,7 +43,7 @@ import numpy as np
 from signorini.fem.assembly import load_vector, p1_basis, system_matrix
 from signorini.fem.discrete import DiscreteProblem, build
 from signorini.fem.mesh import boundary_nodes, friedrichs_keller
-from signorini.fem.norms import evaluate_norms
+from signorini.fem.norms.conventional import evaluate_norms
 from signorini.fem.problem import Problem
 from signorini.fem.solve import solve_discrete
 from signorini.pipeline.artifacts import save_json

@@ -17,7 +17,7 @@ from pathlib import Path
 import pandas as pd
 
 from signorini.fem.discrete import build
-from signorini.fem.norms import Conventions, compute_norms, error_field
+from signorini.fem.norms.conventional import Conventions, compute_norms, error_field
 from signorini.fem.problem import Problem
 from signorini.fem.solve import solve_discrete
 from signorini.solvers import cvxpy_solve

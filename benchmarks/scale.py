@@ -2,6 +2,7 @@
 
     python benchmarks/scale.py                              # N = 501 1001 2001 4001 -> docs/evidence/scale.json
     python benchmarks/scale.py --N 101 201 --out /tmp/s.json   # a quick check
+    python benchmarks/scale.py --N 4001 --stages discretise solve_multigrid Linf_true --resume   # add to it
 
 Each stage is the function the pipeline's job runs (``discretise_stage``, ``solve_stage`` with
 the direct and the multigrid route, ``norms_stage`` with all of the scene's convention norms of
@@ -14,7 +15,8 @@ kept between runs (``--workdir``).  The direct route is skipped where its predic
 
 Keys: ``stages[<stage>][<N>] = {seconds, peak_rss_gib, load1}``; ``exponents[<stage>]``, the p of
 time ∝ unknowns^p between successive N; ``solve_speedup_over_direct_N2001``; ``peak_rss_gib_N4001``,
-the largest job at N = 4001; the load average before and after every stage.
+the largest job at N = 4001; the load average before and after every stage, its range over the
+run (``load1``) and the stages measured under a load above the cores (``loaded_stages``).
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import json
 import math
 import os
 import resource
+import statistics
 import subprocess
 import sys
 import time
@@ -42,7 +45,7 @@ def _scene() -> dict:
 
 def run_stage(stage: str, N: int, workdir: Path) -> None:
     """In the child: run one stage on mesh N and print its wall time and peak RSS as JSON."""
-    from signorini.fem.norm_names import parse_norm_name
+    from signorini.fem.norms.names import parse_norm_name
     from signorini.studies.scene.discretise import discretise_stage
     from signorini.studies.scene.norm import norms_stage
     from signorini.studies.scene.solve import solve_stage
@@ -109,12 +112,20 @@ def exponents(stages: dict, unknowns: dict[int, int]) -> dict[str, dict[str, flo
     return out
 
 
-def measure(Ns: list[int], stages: list[str], workdir: Path, timeout_s: float, save=None) -> dict:
+def measure(
+    Ns: list[int], stages: list[str], workdir: Path, timeout_s: float, save=None, done: dict | None = None
+) -> dict:
     """Every stage at every N, coarse to fine; ``save(summary)`` after each stage (a run cut
-    short leaves what it measured)."""
+    short leaves what it measured).  ``done``: records of an earlier run (``--resume``), kept;
+    their stages are not measured again."""
     records: dict[str, dict[str, dict]] = {stage: {} for stage in stages}
+    for stage, by_N in (done or {}).items():
+        records.setdefault(stage, {}).update(by_N)
+    Ns = sorted(set(Ns) | {int(N) for by_N in records.values() for N in by_N})
     for N in Ns:
         for stage in stages:
+            if "seconds" in records[stage].get(str(N), {}):
+                continue
             if stage == "solve_direct" and (why := _direct_fits(N)):
                 records[stage][str(N)] = {"skipped": why}
             else:
@@ -132,6 +143,17 @@ def summarise(Ns: list[int], records: dict) -> dict:
     out["solve_speedup_over_direct_N2001"] = direct / multigrid if direct and multigrid else None
     at_4001 = [rec["peak_rss_gib"] for rec in (r.get("4001", {}) for r in records.values()) if "peak_rss_gib" in rec]
     out["peak_rss_gib_N4001"] = max(at_4001) if at_4001 else None
+    loads = [x for r in records.values() for rec in r.values() for x in rec.get("load1", [])]
+    if loads:
+        cores = os.cpu_count() or 1
+        out["load1"] = {"min": min(loads), "median": statistics.median(loads), "max": max(loads), "cores": cores}
+        # a stage measured under more runnable processes than cores did not run alone
+        out["loaded_stages"] = sorted(
+            f"{stage}/N{N}"
+            for stage, r in records.items()
+            for N, rec in r.items()
+            if max(rec.get("load1", [0])) > cores
+        )
     return out
 
 
@@ -146,6 +168,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--workdir", type=Path, default=ROOT / "results/benchmarks/scale")
     parser.add_argument("--timeout", type=float, default=3600.0, help="per stage, seconds")
     parser.add_argument("--out", type=Path, default=ROOT / "docs/evidence/scale.json")
+    parser.add_argument("--resume", action="store_true", help="keep the stages --out measured already")
     parser.add_argument("--child", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     from signorini.pipeline.jobenv import single_threaded
@@ -162,7 +185,8 @@ def main(argv: list[str] | None = None) -> int:
         out = head | summary | {"wall_s": time.time() - t0, "complete": complete}
         args.out.write_text(json.dumps(out, indent=1) + "\n", encoding="utf-8")
 
-    save(measure(args.N, args.stages, args.workdir, args.timeout, save), complete=True)
+    done = json.loads(args.out.read_text(encoding="utf-8"))["stages"] if args.resume and args.out.exists() else None
+    save(measure(args.N, args.stages, args.workdir, args.timeout, save, done), complete=True)
     print(f"wrote {args.out}")
     return 0
 

@@ -5,10 +5,10 @@ triangles, on one mesh at a time, and compare their values.
     python benchmarks/true_norm_pruning.py --N 2001 --which old --baseline 34dc782
     python benchmarks/true_norm_pruning.py --N 2001 --which convention
 
-``new`` is ``signorini.fem.true_norms`` of this tree; ``old`` is the same module as it is at the
+``new`` is ``signorini.fem.norms.true`` of this tree; ``old`` is the same module as it is at the
 git revision ``--baseline`` (loaded from ``git show``, its imports resolved in this tree: only
 ``true_norms`` differs); ``convention`` times the norm of the same name under the paper's
-conventions (``fem.norms.evaluate_norms``: fixed rules and point sets), the unit of cost.
+conventions (``fem.norms.conventional.evaluate_norms``: fixed rules and point sets), the unit of cost.
 ``u_h`` of the paper's problem (x0 = 0.5, R = 0.45, A = 10, c = 1, diagonal ``sw_ne``) is solved
 once per mesh by the ``auto`` route and kept in ``/tmp/wt-truenorms-uh<N>.npy``.  Each row
 records the wall and CPU time, the value, its estimated error, whether it converged, the levels
@@ -38,11 +38,11 @@ import numpy as np  # noqa: E402
 
 from signorini.fem.mesh import friedrichs_keller  # noqa: E402
 from signorini.fem.problem import Problem  # noqa: E402
-from signorini.paper import TABLE2_NORMS  # noqa: E402
+from signorini.published import TABLE2_NORMS  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 PROBLEM = {"x0": 0.5, "R": 0.45, "A": 10.0, "c": 1.0}
-MODULE = "src/signorini/fem/true_norms.py"
+MODULE = "src/signorini/fem/norms/true.py"
 
 
 def load_avg() -> list[float]:
@@ -61,9 +61,9 @@ def solution(N: int) -> np.ndarray:
 
 
 def module(which: str, baseline: str):
-    """``signorini.fem.true_norms`` of this tree (``new``) or of the revision ``baseline`` (``old``)."""
+    """``signorini.fem.norms.true`` of this tree (``new``) or of the revision ``baseline`` (``old``)."""
     if which == "new":
-        import signorini.fem.true_norms as new
+        import signorini.fem.norms.true as new
 
         return new
     source = subprocess.run(
@@ -100,7 +100,7 @@ def measure(N: int, names: list[str], which: str, baseline: str, interpolant: bo
     for name in names:
         load0, t0, c0 = load_avg(), time.perf_counter(), time.process_time()
         if mod is None:
-            from signorini.fem.norms import evaluate_norms
+            from signorini.fem.norms.conventional import evaluate_norms
 
             result = Convention(evaluate_norms(problem, mesh, u_h, [name])[name])
         else:

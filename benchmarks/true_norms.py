@@ -1,4 +1,4 @@
-"""Time every true norm (``<norm>_true``, ``signorini.fem.true_norms``) of Tables 1–2 on the paper's meshes.
+"""Time every true norm (``<norm>_true``, ``signorini.fem.norms.true``) of Tables 1–2 on the paper's meshes.
 
     python benchmarks/true_norms.py [--N 101 201 301 401 501] [--out results/benchmarks/true_norms.json]
 
@@ -17,10 +17,10 @@ import os
 import time
 from pathlib import Path
 
-from signorini.fem.norms import evaluate_norms
-from signorini.fem.true_norms import true_norm
-from signorini.paper import TABLE2_NORMS
+from signorini.fem.norms.conventional import evaluate_norms
+from signorini.fem.norms.true import true_norm
 from signorini.pipeline.jobenv import THREAD_VARIABLES
+from signorini.published import TABLE2_NORMS
 from signorini.studies.scene.store import SceneMesh
 
 ROOT = Path(__file__).resolve().parents[1]

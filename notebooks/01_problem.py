@@ -173,7 +173,7 @@ print(f"on the rest of the exact contact set (biactive, u = ∂_n u = 0) u_h ≥
 # ## Where the error sits: the pointwise error map
 #
 # Per triangle, `max |u − u_h|` over the `L^∞` point set and `max |∇(u − u_h)|` over the
-# `W^{1,∞}` point set (the scene's norm conventions; `signorini.fem.norms.error_field`). The
+# `W^{1,∞}` point set (the scene's norm conventions; `signorini.fem.norms.conventional.error_field`). The
 # gradient error is singular at the free point `(0.5, 0)`, where `u ~ r^{3/2}`. The value
 # error concentrates there too, but only once `h` is small enough: its `O(h^{3/2})` peak at
 # the free point competes with the `O(h²)` interpolation error of the smooth but strongly

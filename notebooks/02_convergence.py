@@ -25,7 +25,7 @@
 # to choose any scene, your own included. The published values appear only next to the paper's
 # scene (its problem, triangulation, norm conventions and meshes,
 # `signorini.explore.published_mismatch`): any other scene's tables show its own values, and the
-# notebook says why. The expected orders come from `signorini.paper.expected_rate` for every norm
+# notebook says why. The expected orders come from `signorini.published.expected_rate` for every norm
 # of the grammar; where the paper states none the column says "no theory".
 
 # %%
@@ -35,7 +35,7 @@ import pandas as pd
 from IPython.display import display
 
 from signorini import explore
-from signorini.paper import FIGURE3_NORMS, expected_rate, label_md, label_tex
+from signorini.published import FIGURE3_NORMS, expected_rate, label_md, label_tex
 from signorini.studies.paper.figures import figure3
 from signorini.studies.theory.report import table2_rows
 
@@ -133,7 +133,7 @@ display(summary)
 # minus ε) are `2` and `1` for `p ≤ 4`, and `3/2 + 2/p` and `1/2 + 2/p` beyond
 # (`signorini.explore.expected_orders`). The errors are the pipeline's cached norm values
 # where a norm job exists (e.g. `p = 4, 16, ∞`), else they are evaluated now on the cached
-# solutions with `signorini.fem.norms.evaluate_norms` and the scene's conventions (a few seconds
+# solutions with `signorini.fem.norms.conventional.evaluate_norms` and the scene's conventions (a few seconds
 # per mesh of the paper scene).
 
 # %%

@@ -33,7 +33,7 @@ from IPython.display import display
 
 from signorini import explore
 from signorini.fem.discrete import build
-from signorini.fem.norms import evaluate_norms
+from signorini.fem.norms.conventional import evaluate_norms
 from signorini.fem.problem import Problem
 from signorini.fem.solve import solve_discrete
 

@@ -18,9 +18,9 @@ from pathlib import Path
 import meshio
 import numpy as np
 
-from signorini.paper import PAPER_NORMS
 from signorini.pipeline.config import load_config
 from signorini.pipeline.paths import PEER_DRIVER
+from signorini.published import PAPER_NORMS
 from signorini.studies.scene.discretise import discretise_stage
 from signorini.studies.scene.solve import solve_stage
 from signorini.studies.scene.store import SceneMesh

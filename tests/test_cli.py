@@ -12,7 +12,7 @@ from helpers import read_vtu
 
 from signorini.fem.discrete import build
 from signorini.fem.mesh import boundary_nodes
-from signorini.fem.norms import evaluate_norms
+from signorini.fem.norms.conventional import evaluate_norms
 from signorini.fem.problem import Problem
 from signorini.fem.solve import solve_discrete
 

@@ -25,7 +25,7 @@ SUFFIXES = (".py", ".md", ".csv", ".json", ".yaml", ".yml", ".png", ".pdf", ".te
 # written by the pipeline or the set-up, not part of the repository
 GENERATED = ("results/", ".venv/", ".snakemake/", ".tools/", "paper_figures/runtime.csv", "u201.vtu")
 PACKAGE_ROOTS = ("fem.", "solvers.", "pipeline.", "studies.", "paper.", "plotting.", "formatting.", "explore.")
-# the package's own directories, against which a short path such as `fem/norms.py` is resolved
+# the package's own directories, against which a short path such as `fem/norms/conventional.py` is resolved
 SEARCH_DIRS = (ROOT, ROOT / "src" / "signorini", ROOT / "workflow", ROOT / "workflow" / "scripts")
 
 

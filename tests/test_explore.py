@@ -11,7 +11,7 @@ import pytest
 
 from signorini import explore
 from signorini.fem.mesh import DEFAULT_DIAGONAL
-from signorini.fem.norms import Conventions
+from signorini.fem.norms.conventional import Conventions
 from signorini.fem.problem import Problem
 
 PAPER_NS = [101, 201, 301, 401, 501]
@@ -37,7 +37,7 @@ def test_published_values_belong_to_the_papers_scene_only():
 
 
 def test_expected_orders_match_table2_theory():
-    from signorini.paper import THEORETICAL_ORDERS
+    from signorini.published import THEORETICAL_ORDERS
 
     assert explore.expected_orders(2) == (2.0, 1.0) and explore.expected_orders(4) == (2.0, 1.0)
     assert explore.expected_orders(16) == (THEORETICAL_ORDERS["L16"], THEORETICAL_ORDERS["W116"])

@@ -89,8 +89,8 @@ def solve_command(args: argparse.Namespace) -> int:
     import math
 
     from signorini.fem.discrete import build
+    from signorini.fem.norms.true import evaluate_named_norms
     from signorini.fem.solve import solve_discrete
-    from signorini.fem.true_norms import evaluate_named_norms
 
     try:
         problem, names = check_arguments(args)

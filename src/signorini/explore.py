@@ -176,7 +176,7 @@ class Scene:
     @cached_property
     def conventions(self):
         """The norm conventions the scene's norm jobs used (from a norm JSON), else the defaults."""
-        from signorini.fem.conventions import Conventions
+        from signorini.fem.norms.conventions import Conventions
 
         for path in sorted((self.dir / f"N{self.Ns[0]}" / "norms").glob("*.json")):
             return Conventions(**load_json(path)["conventions"])
@@ -211,11 +211,11 @@ class Scene:
     def norms_for(self, names: Sequence[str], Ns: Sequence[int] | None = None):
         """The named norms of ``u − u_h`` for each ``N`` (DataFrame ``N``, ``h``, names): the
         pipeline's cached value where a norm job exists, else evaluated on the cached
-        solution with the scene's conventions (``fem.true_norms.evaluate_named_norms``)."""
+        solution with the scene's conventions (``fem.norms.true.evaluate_named_norms``)."""
         import pandas as pd
 
         from signorini.fem.mesh import mesh_width
-        from signorini.fem.true_norms import evaluate_named_norms
+        from signorini.fem.norms.true import evaluate_named_norms
 
         rows = []
         for N in Ns or self.Ns:
@@ -249,7 +249,7 @@ def published_mismatch(
     the paper's problem (``Problem()``) on its triangulation (``DEFAULT_DIAGONAL``) under the
     default norm conventions on the meshes of its tables (``paper_Ns``): another problem or other
     meshes give other numbers, which a table next to the paper's would pass off as comparable."""
-    from signorini.fem.conventions import Conventions
+    from signorini.fem.norms.conventions import Conventions
 
     if problem != Problem():
         return f"its problem {problem.as_dict()} is not the paper's {Problem().as_dict()}"
@@ -274,7 +274,7 @@ def ours_table(scene: Scene, table: int):
     paper's: the cells of the pipeline's tables (``studies.paper.tables``), with their digits."""
     import pandas as pd
 
-    from signorini.paper import TABLE1_NORMS, TABLE2_NORMS, expected_rate
+    from signorini.published import TABLE1_NORMS, TABLE2_NORMS, expected_rate
     from signorini.studies.paper.tables import eoc_rows, eoc_uncertainties, error_rows
 
     errors = scene.errors()
@@ -334,15 +334,15 @@ def _denominator(label: str) -> int:
 
 def expected_orders(p: float) -> tuple[float, float]:
     """The paper's expected orders (each minus ε) of ``‖u − u_h‖_{L^p}`` and ``‖u − u_h‖_{W^{1,p}}``
-    (``signorini.paper.expected_order``): ``(2, 1)`` for ``p ≤ 4``, ``(3/2 + 2/p, 1/2 + 2/p)`` beyond."""
-    from signorini.paper import expected_order
+    (``signorini.published.expected_order``): ``(2, 1)`` for ``p ≤ 4``, ``(3/2 + 2/p, 1/2 + 2/p)`` beyond."""
+    from signorini.published import expected_order
 
     return expected_order("L", p), expected_order("W1", p)
 
 
 def norm_names(p: float) -> tuple[str, str]:
     """The names of the ``L^p`` and ``W^{1,p}`` norms (``L6``, ``W16``, ``L2.5``, ``Linf``)."""
-    from signorini.fem.norm_names import lp_names
+    from signorini.fem.norms.names import lp_names
 
     return lp_names(p)
 
@@ -373,7 +373,7 @@ def rates_for_p(scene: Scene, p: float):
 def element_errors(problem: Problem, mesh, u_h: np.ndarray, conventions=None) -> dict[str, np.ndarray]:
     """Per triangle: ``max |u − u_h|`` over the ``L^∞`` point set and ``max |∇(u − u_h)|`` over the
     ``W^{1,∞}`` point set (``norms.error_field``), and the centroids — the error map."""
-    from signorini.fem.norms import error_field
+    from signorini.fem.norms.conventional import error_field
 
     f = error_field(problem, mesh, u_h, conventions, norms=["Linf", "W1inf"])
     return {

@@ -33,7 +33,7 @@ def test_every_rule_with_a_script_lists_its_closure(tmp_path):
     listed = {p for p in solve["input"] if p.startswith(("src/", "workflow/scripts/"))}
     closure = import_closure(tmp_path / "workflow/scripts/solve.py", tmp_path / "src")
     assert listed == {"workflow/scripts/solve.py"} | {p.relative_to(tmp_path).as_posix() for p in closure}
-    assert "src/signorini/solvers/active_set.py" in listed and "src/signorini/fem/norms.py" not in listed
+    assert "src/signorini/solvers/active_set.py" in listed and "src/signorini/fem/norms/conventional.py" not in listed
 
 
 # --- the edit matrix ---------------------------------------------------------------------------
@@ -138,7 +138,7 @@ def test_edits_rerun_what_the_design_promises(edit_matrix):
         assert rules and rules <= {"work_precision_table", "work_precision_figures", "work_precision_report"}
         assert not rules & paper
     assert rules_after(runs, "studies/paper/tables.py") == {"table1", "table2", "reproduction"}
-    norms = rules_after(runs, "fem/norms.py")
+    norms = rules_after(runs, "fem/norms/conventional.py")
     assert "norm" in norms and not norms & {"discretise", "solve", "sample", "figure2"}
     solver = rules_after(runs, "solvers/active_set.py")
     assert {"solve", "norm", "errors", "eoc", "table1", "runtime"} <= solver and "discretise" not in solver

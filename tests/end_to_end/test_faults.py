@@ -30,7 +30,7 @@ def test_an_edit_during_a_run_is_not_trusted(built_repo, tmp_path):
     from helpers import clone_built, planned, snakemake
 
     repo = clone_built(built_repo, tmp_path / "repo")
-    module = repo / "src/signorini/fem/norms.py"
+    module = repo / "src/signorini/fem/norms/conventional.py"
     st = module.stat()
     module.write_text(module.read_text() + "\n# edited while the norm jobs ran\n")
     os.utime(module, ns=(st.st_atime_ns, st.st_mtime_ns))  # the jobs' outputs are newer than the edit
@@ -262,7 +262,7 @@ def test_read_only_calls_change_nothing_however_spelled(tiny_built, tmp_path):
     from helpers import clone_built, snakemake
 
     repo = clone_built(tiny_built, tmp_path / "repo")
-    module = repo / "src/signorini/fem/norms.py"
+    module = repo / "src/signorini/fem/norms/conventional.py"
     module.write_text(module.read_text(encoding="utf-8") + "\n# a comment\n", encoding="utf-8")
     damaged = repo / "results/tiny/N21/norms/L4.json"
     damaged.write_text(damaged.read_text(encoding="utf-8")[:50], encoding="utf-8")

@@ -1,10 +1,17 @@
-"""The studies beyond the paper end to end: the theory scene's and the stability atlas's outputs of
-the built repository copy (``conftest.built_repo``)."""
+"""The studies beyond the paper end to end: the theory scene's, the stability atlas's, the
+work-precision study's and the true norms' outputs of the built repository copy
+(``conftest.built_repo``)."""
 
 from __future__ import annotations
 
 import csv
+import math
 
+import pandas as pd
+from helpers import snakemake
+
+from signorini.fem.norms.names import true_name
+from signorini.fem.norms.true import RTOL
 from signorini.studies.stability import atlas as stab_atlas
 
 
@@ -46,3 +53,58 @@ def test_theory_target_end_to_end(built_repo):
     assert "| L4_true |" not in md.split("## Rates against p")[1]
     for name in ("theory_rates.png", "theory_extra.png", "theory.csv"):
         assert (built_repo / "paper_figures" / name).stat().st_size > 0
+
+
+def test_small_study_end_to_end(built_repo):
+    """The small study of the built copy (N = 11, 21 of the smoke scene; active set and OSQP at two
+    tolerances): the paper_figures outputs, the source scene's systems and solutions reused (not
+    recomputed), a no-op rerun."""
+    out = built_repo / "paper_figures"
+    for name in ("work_precision.pdf", "work_precision.png", "cost_of_accuracy.pdf", "cost_of_accuracy.png"):
+        assert (out / name).stat().st_size > 1000, name
+    df = pd.read_csv(out / "work_precision.csv")
+    df = df[~df["solver"].str.startswith("petsc_")]  # the peer: tests/test_peers.py
+    assert len(df) == 2 * (2 + 3)  # per N: the active set (cascade, cold), OSQP at its default and two tolerances
+    assert set(df["config"]) == {"active_set", "active_set_cold", "osqp"}
+    assert (df["time_runs"] >= 1).all() and (df["time_ref"] > 0).all() and (df["ref_s"] > 0).all()
+    assert set(df.loc[df["config"] == "active_set_cold", "start"]) == {"cold"}
+    exact = df[df["config"] == "active_set"]
+    assert (exact["alg_L4"] == 0).all() and (exact["total_L4"] == exact["disc_L4"]).all()
+    assert set(df["status"]) <= {"ok", "inaccurate"}
+    assert {c.split("_", 1)[1] for c in df.columns if c.startswith("alg_")} == {"L4", "W14"}
+    md = (out / "work_precision.md").read_text()
+    assert "## Which tolerance keeps Table 1" in md and "Machine load during the measurements" in md
+    assert "**Timing protocol**" in md and "cold against cold: active set (cold)" in md
+    # reused: the smoke scene's systems and solutions, none of the study scene's own
+    assert (built_repo / "results/smoke/N21/solution.npz").exists()
+    assert not list((built_repo / "results/work_precision").glob("N*/s*.npz"))
+    assert (df["build_s"] > 0).all()  # the assembly time of the smoke scene's discretise job
+    noop = snakemake(built_repo, "-n", "work_precision")
+    assert "Nothing to be done" in noop.stdout + noop.stderr
+    assert math.isfinite(df["time_s"].min())
+
+
+def test_true_norm_artifacts_of_the_second_case_carry_their_accuracy(built_repo):
+    from signorini.pipeline.artifacts import load_json
+
+    for name in ("L4_true", "Linf_true", "W14_true", "W1inf_true", "H12_true"):
+        art = load_json(built_repo / f"results/case2/N241/norms/{name}.json")
+        acc = art["quadrature_error"]
+        assert acc["converged"] and acc["rtol"] == RTOL and len(acc["levels"]) >= 2
+        assert acc["error_estimate"] <= RTOL * art["value"]
+        assert acc["levels"][-1]["value"] == art["value"]
+
+
+def test_true_norms_target_renders_every_norm_of_table_2(built_repo):
+    """The test workflow renders the smoke scene (N = 11, 21, 41): a row per mesh and norm, converged."""
+    import pandas as pd
+
+    from signorini.published import TABLE2_NORMS
+
+    t1 = pd.read_csv(built_repo / "paper_figures/table1_true.csv")
+    assert list(t1["norm"]) == list(TABLE2_NORMS) * 3 and list(t1["h"].unique()) == ["1/11", "1/21", "1/41"]
+    assert (t1["quadrature_error"] <= RTOL * t1["true"]).all()
+    assert t1["paper"].isna().all()  # the paper has no row for these meshes
+    t2 = pd.read_csv(built_repo / "paper_figures/table2_true.csv")
+    assert list(t2.columns) == ["h", *(true_name(n) for n in TABLE2_NORMS)]
+    assert "## Gap per norm" in (built_repo / "paper_figures/table1_true.md").read_text()

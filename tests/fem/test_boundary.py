@@ -2,7 +2,7 @@
 problem names a point at which ``u`` is not smooth, graded toward its singular points.
 
 More of the rule (the manufactured problem's edge, the ``H^{1/2}`` norm it gives) is tested with the
-true norms in ``tests/fem/test_true_norms.py``.
+true norms in ``tests/fem/norms/test_true.py``.
 """
 
 from __future__ import annotations

@@ -13,7 +13,7 @@ import pytest
 from signorini.fem.convergence import eoc, regression_slope
 from signorini.fem.discrete import build
 from signorini.fem.mesh import mesh_width
-from signorini.fem.norms import compute_norms, error_field
+from signorini.fem.norms.conventional import compute_norms, error_field
 from signorini.fem.problem import Problem
 from signorini.fem.solve import solve_discrete
 

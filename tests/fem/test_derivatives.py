@@ -3,7 +3,7 @@
 Hölder bound of ``∇u`` on random pairs of points.
 
 The bounds of the second derivatives against the closed form are tested with the true norms in
-``tests/fem/test_true_norms.py``.
+``tests/fem/norms/test_true.py``.
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ from helpers import check_kkt_independently, rel_max_diff
 from helpers import rel_max_diff as rel
 
 from signorini.fem.discrete import build
-from signorini.fem.norms import evaluate_norms
+from signorini.fem.norms.conventional import evaluate_norms
 from signorini.fem.problem import ConstantProblem, FullContactProblem, Problem
 from signorini.fem.solve import solve_discrete
 from signorini.solvers import kkt_certificate

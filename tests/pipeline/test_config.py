@@ -10,7 +10,7 @@ import yaml
 from helpers import NORMS, PROBLEM, ROOT, SMOKE_N, copy_repo, snakemake
 
 from signorini.fem.discrete import build
-from signorini.fem.norms import evaluate_norms
+from signorini.fem.norms.conventional import evaluate_norms
 from signorini.fem.problem import Problem
 from signorini.fem.solve import solve_discrete
 from signorini.pipeline.config import (

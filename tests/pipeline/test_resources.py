@@ -40,3 +40,26 @@ def test_a_job_longer_than_the_partition_allows_is_refused():
     with pytest.raises(ConfigError, match=r"N = 9001 needs about .* GB for its solve job .* more than the 62.5 GB "
                        r"of the largest node of Slurm partition short"):
         check_config(_smoke_config([9001]), node=node)
+
+
+def test_a_solve_job_requests_the_memory_of_the_route_it_takes():
+    """``auto`` solves N = 501 by the direct route and N = 2001 by the multigrid route, whose
+    request is the multigrid model's (measured 2.9 GB against 7.5 GB at N = 2001)."""
+    from signorini.pipeline.resources import largest_job, mem_mb, solve_rule
+
+    assert [solve_rule(s, 501) for s in ("active_set", "auto", "multigrid")] == ["solve", "solve", "solve_multigrid"]
+    assert solve_rule("auto", 2001) == "solve_multigrid" and solve_rule("cvxpy_osqp", 2001) == "solve"
+    assert 2.9 * 1024 < mem_mb("solve_multigrid", 2001) < mem_mb("solve", 2001)
+    assert largest_job(4001, "active_set")[0] == "solve" and largest_job(4001, "auto")[0] != "solve"
+
+
+@pytest.mark.parametrize(("solver", "fits"), [("active_set", False), ("auto", True), ("multigrid", True)])
+def test_a_mesh_fits_or_not_by_the_route_of_its_scene(solver, fits):
+    """N = 4001 on 24 GB: the direct route's factor does not fit, the multigrid route's jobs do."""
+    config = _smoke_config([11, 4001])
+    config["scenes"]["smoke"]["solver"] = solver
+    if fits:
+        check_config(config, 24 * 1024)
+    else:
+        with pytest.raises(ConfigError, match=r"N = 4001 needs about 31\.8 GB for its solve job"):
+            check_config(config, 24 * 1024)

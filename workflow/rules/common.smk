@@ -25,8 +25,8 @@ if shlex.quote(sys.executable) != sys.executable and "conda" not in _deploy:
 # handling of Ctrl-C stays as it is
 os.environ.update(SIGNORINI_JOB_INTERRUPT="quiet")
 
-from signorini.fem.norm_names import true_name
-from signorini.paper import FIGURE3_NORMS, TABLE1_NORMS, TABLE2_NORMS
+from signorini.fem.norms.names import true_name
+from signorini.published import FIGURE3_NORMS, TABLE1_NORMS, TABLE2_NORMS
 from signorini.pipeline import paths, resources
 from signorini.pipeline.artifacts import code_digest
 from signorini.pipeline.codedeps import ImportCache, code_inputs

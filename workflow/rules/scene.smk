@@ -45,7 +45,7 @@ rule solve:
     conda:
         "../envs/signorini.yaml"
     resources:
-        mem_mb=lambda wc: resources.mem_mb("solve", wc.N),
+        mem_mb=lambda wc: resources.mem_mb(resources.solve_rule(scene_of(wc)["solver"], wc.N), wc.N),
         runtime=lambda wc: resources.runtime_min("solve", wc.N),
     params:
         problem=scene_param("problem"),

@@ -1,4 +1,4 @@
-# The norms of Tables 1-2 evaluated to a stated accuracy (<norm>_true, signorini.fem.true_norms)
+# The norms of Tables 1-2 evaluated to a stated accuracy (<norm>_true, signorini.fem.norms.true)
 # on the rendered scene's meshes, beside the paper's conventions and printed values. Not part of
 # `all`: the true norm jobs take seconds to half a minute each (snakemake -c2 true_norms).
 

@@ -1,7 +1,7 @@
 """rule errors: results/<scene>/errors.csv from the per-norm artifacts."""
 
 from signorini.pipeline.joblog import job_log
-from signorini.studies.scene.errors import errors_stage
+from signorini.studies.scene.error_table import errors_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 

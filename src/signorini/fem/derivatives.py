@@ -1,4 +1,4 @@
-"""What the true norms (``fem.true_norms``) know of the derivatives of an exact solution: bounds of
+"""What the true norms (``fem.norms.true``) know of the derivatives of an exact solution: bounds of
 its second derivatives and the Hölder constant of its gradient, by which the true maxima exclude
 triangles, and ``u`` with ``∇u`` in one evaluation.
 

@@ -84,7 +84,7 @@ def _short(value: object, limit: int = 60) -> str:
 
 def schema_message(error) -> str:
     """A jsonschema ``ValidationError`` in one line: the field, the value and what is allowed."""
-    from signorini.fem.norm_names import GRAMMAR
+    from signorini.fem.norms.names import GRAMMAR
 
     field, value, kind, arg = field_name(error.absolute_path), error.instance, error.validator, error.validator_value
     if kind == "pattern" and "L2boundary" in str(arg):  # the norm names: the grammar in words
@@ -181,8 +181,8 @@ def check_mesh_sizes(field: str, Ns: Sequence) -> None:
 
 def check_norm_name(field: str, name: object) -> str:
     """The canonical spelling of a norm name; ConfigError naming ``field`` for a name outside the
-    grammar (``fem.norm_names``, in words) or a second spelling of a norm (``L1.0``, ``L01``: ``L1``)."""
-    from signorini.fem.norm_names import UnknownNormError, canonical_norm_name
+    grammar (``fem.norms.names``, in words) or a second spelling of a norm (``L1.0``, ``L01``: ``L1``)."""
+    from signorini.fem.norms.names import UnknownNormError, canonical_norm_name
 
     try:
         canonical = canonical_norm_name(str(name))
@@ -212,7 +212,7 @@ def amplitude_floor(R: float, N_max: int) -> float:
     """The smallest amplitude ``A`` whose errors on meshes up to ``N_max`` are normal doubles.
 
     The error scales linearly with ``A`` (``u`` and the data do), and the norms scale their
-    integrands by powers of two (``fem.norms.power_scale``), which is exact: what is lost below
+    integrands by powers of two (``fem.norms.conventional.power_scale``), which is exact: what is lost below
     this bound is the error itself, a difference of values of size ``A·|u₁|`` that becomes a
     subnormal number with fewer significant bits (relative spacing ``2^-1074 / |e|``).  The
     smallest error reported, the ``L^p`` error on the finest mesh, is about ``A R^{3/2} h²``
@@ -235,11 +235,12 @@ def check_amplitude(field: str, A: float, R: float, Ns: Sequence[int]) -> None:
         )
 
 
-def check_memory(field: str, N: int, limit_mb: int, available: str = "available") -> None:
-    """The largest job on mesh ``N`` (``resources.largest_job``) fits into ``limit_mb``."""
+def check_memory(field: str, N: int, limit_mb: int, available: str = "available", solver: str = "active_set") -> None:
+    """The largest job on mesh ``N`` with solves by ``solver`` (``resources.largest_job``) fits
+    into ``limit_mb``."""
     from signorini.pipeline.resources import largest_job
 
-    rule, need = largest_job(N)
+    rule, need = largest_job(N, solver)
     if need > limit_mb:
         raise ConfigError(
             f"{field}: N = {N} needs about {_gb(need)} for its {rule} job (estimate from the "
@@ -272,7 +273,7 @@ def check_scene_name(field: str, name: object) -> None:
 
 def _check_figures_scene(config: Mapping, scenes: Mapping) -> None:
     """The scene paper_figures/ is rendered from has the paper's norms and two meshes at least."""
-    from signorini.paper import FIGURE3_NORMS, TABLE1_NORMS, TABLE2_NORMS
+    from signorini.published import FIGURE3_NORMS, TABLE1_NORMS, TABLE2_NORMS
 
     fig = config.get("figures_scene")
     if fig is None:
@@ -291,14 +292,14 @@ def _check_figures_scene(config: Mapping, scenes: Mapping) -> None:
 
 
 def _check_scene(where: str, scene: Mapping, limit: int, available: str, node: NodeLimits | None) -> None:
-    from signorini.fem.conventions import Conventions
+    from signorini.fem.norms.conventions import Conventions
     from signorini.fem.problem import Problem, ProblemParameterError
     from signorini.pipeline.solver_options import check_options
 
     Ns = scene.get("N", [])
     check_mesh_sizes(f"{where}.N", Ns)
     for i, N in enumerate(Ns):
-        check_memory(f"{where}.N[{i}]", N, limit, available)
+        check_memory(f"{where}.N[{i}]", N, limit, available, scene.get("solver") or "active_set")
     problem = check_options(f"{where}.solver_options", scene.get("solver", ""), scene.get("solver_options") or {})
     if problem:
         raise ConfigError(problem)
@@ -335,7 +336,7 @@ def _check_runtime(where: str, Ns: list, norms: list, node: NodeLimits) -> None:
 
 def check_config(config: dict, mem_limit_mb: int | None = None, node: NodeLimits | None = None) -> None:
     """Semantic checks of a schema-valid config: scene names that can be paths, integer ``N``
-    strictly increasing, norm names of the grammar (``fem.norm_names``) in their one spelling and
+    strictly increasing, norm names of the grammar (``fem.norms.names``) in their one spelling and
     each once, admissible problem parameters with an amplitude whose errors do not underflow,
     conventions, meshes whose jobs fit into ``mem_limit_mb`` (default: this machine's memory; with
     ``node``, the largest node of a Slurm partition: its memory and time limit), the solver's

@@ -64,7 +64,7 @@ def scene_markdown(scene: str, errors_csv: str | os.PathLike, eoc_csv: str | os.
     import pandas as pd
 
     from signorini.formatting import h_label, md_table, sci_md
-    from signorini.paper import label_md
+    from signorini.published import label_md
 
     errors = pd.read_csv(errors_csv, encoding="utf-8")
     norms = [c for c in errors.columns if c not in ("N", "h")]
@@ -136,8 +136,8 @@ def digest(*files: str | os.PathLike) -> str:
 def _evidence(target: str, config: Mapping) -> list[str]:
     """The cached artifacts a target's outputs are rendered from (their existence in ``results/``
     is what "built here" means; the committed outputs come without them)."""
-    from signorini.fem.norm_names import true_name
-    from signorini.paper import TABLE2_NORMS
+    from signorini.fem.norms.names import true_name
+    from signorini.published import TABLE2_NORMS
 
     scenes, fig = config["scenes"], config.get("figures_scene", "paper")
     if target == "all":

@@ -1,9 +1,11 @@
 """Memory and run-time requests of the per-mesh jobs, defined once: the rules' ``resources`` and
 the config check's bound use them.  Memory grows with the number of unknowns, (N + 1)² ≈ N²; the
-constants follow the peaks measured at N = 2001 (discretise 3.8 GB, solve 7.5 GB, a norm ≤ 1.3 GB,
-theory_quantities 4.9 GB) with some headroom.  Run times at N = 2001 on a loaded 2-CPU machine
-(load about 4): discretise 130 s, solve 216 s, a norm 20–80 s, theory_quantities 228 s; the
-requests are about ten times these, since a job that outlives its request is killed."""
+constants follow the peaks measured at N = 2001 (discretise 0.9 GB, solve 7.5 GB by the direct
+route and 2.9 GB by the multigrid route, a norm ≤ 1.3 GB, theory_quantities 4.9 GB) with some
+headroom; a solve job's request follows the route its scene's solver takes on that mesh.  Run
+times at N = 2001 on a loaded 2-CPU machine (load about 4): discretise 130 s, solve 216 s, a norm
+20–80 s, theory_quantities 228 s; the requests are about ten times these, since a job that
+outlives its request is killed."""
 
 from __future__ import annotations
 
@@ -12,12 +14,13 @@ import subprocess
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from signorini.fem.norm_names import parse_norm_name
+from signorini.fem.norms.names import parse_norm_name
 
 # rule: (base, N² per unit) of the memory request in MB and of the run-time request in minutes
 MEM_MB = {
-    "discretise": (500, 1000),
-    "solve": (500, 500),
+    "discretise": (500, 4000),  # the stencil assembly streams: O(n) memory
+    "solve": (500, 500),  # the direct route: a sparse Cholesky factor with its fill-in
+    "solve_multigrid": (500, 1200),  # the multigrid route: the matrix, its hierarchy, a few vectors
     "norm": (500, 2000),
     "theory_quantities": (1000, 500),
     "work_precision_measure": (1500, 250),
@@ -30,6 +33,14 @@ RUNTIME_MIN = {
     "theory_quantities": (5, 100000),
 }
 SCENE_RULES = ("discretise", "solve", "norm")  # the jobs every scene runs on each mesh
+
+
+def solve_rule(solver: str, N: int) -> str:
+    """The key of ``MEM_MB`` for a solve by ``solver`` on mesh ``N``: the route ``auto`` takes
+    there (``solvers.exact_route``) decides between the direct and the multigrid model."""
+    from signorini.solvers import exact_route
+
+    return "solve_multigrid" if exact_route(solver, (int(N) + 1) ** 2) == "multigrid" else "solve"
 
 
 def mem_mb(rule: str, N: int) -> int:
@@ -62,9 +73,11 @@ def machine_mem_mb() -> int:
     return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") // 2**20
 
 
-def largest_job(N: int) -> tuple[str, int]:
-    """The scene job with the largest memory request on mesh ``N``: (rule, MB)."""
-    return max(((rule, mem_mb(rule, N)) for rule in SCENE_RULES), key=lambda item: item[1])
+def largest_job(N: int, solver: str = "active_set") -> tuple[str, int]:
+    """The scene job with the largest memory request on mesh ``N`` when its solves use ``solver``:
+    (rule, MB)."""
+    rules = (solve_rule(solver, N) if rule == "solve" else rule for rule in SCENE_RULES)
+    return max(((rule, mem_mb(rule, N)) for rule in rules), key=lambda item: item[1])
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,7 @@ import math
 import pytest
 from helpers import PROBLEM, solve_chain
 
-from signorini.fem.conventions import Conventions
+from signorini.fem.norms.conventions import Conventions
 from signorini.studies.paper.boundary_rule import h12_boundary_stage, h12_value
 from signorini.studies.scene.store import SceneMesh
 

@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from signorini.paper import expected_rate
+from signorini.published import expected_rate
 from signorini.studies.paper.figures import figure2, figure3, rounded_fields
 
 

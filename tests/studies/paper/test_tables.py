@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 
 from signorini.formatting import sci_md
-from signorini.paper import TABLE1_NORMS, TABLE2_NORMS
+from signorini.published import TABLE1_NORMS, TABLE2_NORMS
 
 
 def _errors(scale: float = 1.0) -> tuple[pd.DataFrame, pd.DataFrame]:

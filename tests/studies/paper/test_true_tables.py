@@ -1,7 +1,7 @@
 """The tables of the true norms (``signorini.studies.paper.true_tables``): the gaps of the paper's
 conventions and of the printed values to the true norms, and the EOCs of the true norms.
 
-The stage on synthetic artifacts is tested with the true norms in ``tests/fem/test_true_norms.py``.
+The stage on synthetic artifacts is tested with the true norms in ``tests/fem/norms/test_true.py``.
 """
 
 from __future__ import annotations

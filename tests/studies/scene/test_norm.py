@@ -60,7 +60,7 @@ def test_a_perturbation_of_u_h_moves_each_norm_by_at_most_its_uncertainty_norm(n
     the geometric-mean ``H^{1/2}`` estimate, for random and for worst-sign perturbations."""
     from dataclasses import replace
 
-    from signorini.fem.norms import evaluate_norms
+    from signorini.fem.norms.conventional import evaluate_norms
     from signorini.fem.problem import Problem
     from signorini.studies.scene.norm import uncertainty_norm
 

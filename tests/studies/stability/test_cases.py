@@ -122,7 +122,7 @@ def test_run_case_classifies_and_never_raises():
 def test_the_multigrid_column_is_measured_like_the_direct_one():
     """The multigrid route is an exact column: the certificate's 1e-10, no cvxpy options, and on
     a case the same contact set and u as the direct route's column."""
-    from signorini.fem.norms import evaluate_norms
+    from signorini.fem.norms.conventional import evaluate_norms
 
     config = load_config(ROOT / "workflow/config.yaml")
     atlas = stab_atlas.scene_atlas(config, "stability")

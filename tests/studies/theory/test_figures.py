@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from signorini.paper import expected_order
+from signorini.published import expected_order
 from signorini.studies.theory.figures import extra_figure, rate_figure
 from signorini.studies.theory.report import rate_rows
 

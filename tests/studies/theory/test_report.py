@@ -9,7 +9,7 @@ import pandas as pd
 def test_table2_rows_give_the_eoc_of_each_mesh_pair():
     """``table2_rows``: e = C h^r gives EOC r on every consecutive pair, in the paper's norms
     present, meshes sorted by N; the findings render them with the expected orders."""
-    from signorini.paper import TABLE2_NORMS
+    from signorini.published import TABLE2_NORMS
     from signorini.studies.theory.report import table2_rows
 
     N = np.array([1001, 101, 201, 2001])

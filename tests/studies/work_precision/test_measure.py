@@ -3,20 +3,18 @@ algebraic error of the exact solver), the findings, and the small study end to e
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pandas as pd
 import pytest
-from helpers import PROBLEM, snakemake
+from helpers import PROBLEM
 from skfem import MeshTri
 
-from signorini.fem import p1norms
 from signorini.fem.mesh import friedrichs_keller
-from signorini.fem.norms import Conventions, evaluate_norms
+from signorini.fem.norms import p1 as p1norms
+from signorini.fem.norms.conventional import Conventions, evaluate_norms
 from signorini.fem.problem import Problem
 from signorini.fem.quadrature import stroud_conical
-from signorini.paper import PAPER_NORMS
+from signorini.published import PAPER_NORMS
 from signorini.solvers import Certificate, NotConvergedError, SolveResult
 from signorini.studies.scene.discretise import discretise_stage
 from signorini.studies.scene.norm import norm_stage
@@ -327,37 +325,6 @@ def test_fair_race_same_warm_start_and_cold_against_cold():
     assert "## Same warm start, and cold against cold" in md and "**Timing protocol**" in md
     assert "same warm start: ours" in md and "cold against cold: ours_cold" in md
 
-
-# --- the study end to end -------------------------------------------------------------------
-
-
-def test_small_study_end_to_end(built_repo):
-    """The small study of the built copy (N = 11, 21 of the smoke scene; active set and OSQP at two
-    tolerances): the paper_figures outputs, the source scene's systems and solutions reused (not
-    recomputed), a no-op rerun."""
-    out = built_repo / "paper_figures"
-    for name in ("work_precision.pdf", "work_precision.png", "cost_of_accuracy.pdf", "cost_of_accuracy.png"):
-        assert (out / name).stat().st_size > 1000, name
-    df = pd.read_csv(out / "work_precision.csv")
-    df = df[~df["solver"].str.startswith("petsc_")]  # the peer: tests/test_peers.py
-    assert len(df) == 2 * (2 + 3)  # per N: the active set (cascade, cold), OSQP at its default and two tolerances
-    assert set(df["config"]) == {"active_set", "active_set_cold", "osqp"}
-    assert (df["time_runs"] >= 1).all() and (df["time_ref"] > 0).all() and (df["ref_s"] > 0).all()
-    assert set(df.loc[df["config"] == "active_set_cold", "start"]) == {"cold"}
-    exact = df[df["config"] == "active_set"]
-    assert (exact["alg_L4"] == 0).all() and (exact["total_L4"] == exact["disc_L4"]).all()
-    assert set(df["status"]) <= {"ok", "inaccurate"}
-    assert {c.split("_", 1)[1] for c in df.columns if c.startswith("alg_")} == {"L4", "W14"}
-    md = (out / "work_precision.md").read_text()
-    assert "## Which tolerance keeps Table 1" in md and "Machine load during the measurements" in md
-    assert "**Timing protocol**" in md and "cold against cold: active set (cold)" in md
-    # reused: the smoke scene's systems and solutions, none of the study scene's own
-    assert (built_repo / "results/smoke/N21/solution.npz").exists()
-    assert not list((built_repo / "results/work_precision").glob("N*/s*.npz"))
-    assert (df["build_s"] > 0).all()  # the assembly time of the smoke scene's discretise job
-    noop = snakemake(built_repo, "-n", "work_precision")
-    assert "Nothing to be done" in noop.stdout + noop.stderr
-    assert math.isfinite(df["time_s"].min())
 
 
 def test_figure_draws_the_fastest_configuration_per_family_with_the_legend_below():

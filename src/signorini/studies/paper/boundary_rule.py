@@ -10,8 +10,8 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from signorini.fem.conventions import Conventions
-from signorini.fem.norms import BOUNDARY_POINTS, boundary_error
+from signorini.fem.norms.conventional import BOUNDARY_POINTS, boundary_error
+from signorini.fem.norms.conventions import Conventions
 from signorini.formatting import csv_text
 from signorini.pipeline.artifacts import atomic_write_text
 from signorini.studies.scene.store import SceneMesh

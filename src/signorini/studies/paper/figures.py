@@ -14,8 +14,8 @@ from __future__ import annotations
 import os
 from collections.abc import Mapping, Sequence
 
-from signorini.paper import FIGURE3_NORMS, error_label_tex, expected_rate
 from signorini.plotting import new_figure, save, style, styled
+from signorini.published import FIGURE3_NORMS, error_label_tex, expected_rate
 
 MARKERS = {"L4": "o", "W14": "s"}
 # u and f are exact functions: only a libm's last bits can differ between processors; 6 digits are

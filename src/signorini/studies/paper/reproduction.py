@@ -8,8 +8,8 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 
 from signorini.formatting import md_table
-from signorini.paper import label_md
 from signorini.pipeline.artifacts import atomic_write_text
+from signorini.published import label_md
 from signorini.studies.paper.reference import read_table_csv, relative_deviation
 
 HEADER = ["h", "norm", "ours", "paper", "rel. deviation"]

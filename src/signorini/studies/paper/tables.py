@@ -26,8 +26,8 @@ from signorini.formatting import (
     tex_h,
     tex_table,
 )
-from signorini.paper import TABLE1_NORMS, TABLE2_NORMS, THEORETICAL_ORDERS, label_md, label_tex
 from signorini.pipeline.artifacts import atomic_write_text
+from signorini.published import TABLE1_NORMS, TABLE2_NORMS, THEORETICAL_ORDERS, label_md, label_tex
 
 TABLE1_CAPTION = (
     "Absolute error u − u_h between the analytic solution u and the finite element "

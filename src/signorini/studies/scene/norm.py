@@ -13,9 +13,9 @@ from collections.abc import Mapping
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
-from signorini.fem.conventions import Conventions
-from signorini.fem.norm_names import parse_norm_name
-from signorini.fem.true_norms import evaluate_named_norms
+from signorini.fem.norms.conventions import Conventions
+from signorini.fem.norms.names import parse_norm_name
+from signorini.fem.norms.true import evaluate_named_norms
 from signorini.pipeline.artifacts import save_json
 from signorini.studies.scene.store import SceneMesh
 
@@ -95,7 +95,7 @@ def norms_stage(
 ) -> dict[str, dict]:
     """Norms of ``u - u_h`` on one mesh of a scene, each saved to its own JSON (``outputs``:
     norm name -> path) with its value and timing, on one mesh built once: the norms under the
-    conventions together (``fem.true_norms.evaluate_named_norms``: each value the one a job of that
+    conventions together (``fem.norms.true.evaluate_named_norms``: each value the one a job of that
     norm alone computes, bit for bit), then each ``_true`` norm, which also saves its estimated
     quadrature error and refinement levels.  With the solve artifact's ``algebraic_error`` each
     artifact also records how far round-off in ``u_h`` can move its value (``algebraic_error``:

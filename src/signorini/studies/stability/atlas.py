@@ -8,7 +8,7 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
 
 from signorini.fem.mesh import DEFAULT_DIAGONAL
-from signorini.paper import PAPER_NORMS
+from signorini.published import PAPER_NORMS
 
 GROUPS = ("scaling", "reaction", "mesh", "degenerate", "bad_input")
 CORRUPTIONS = {
@@ -133,7 +133,7 @@ def _parse_solvers(block: Mapping, where: str) -> tuple[dict[str, SolverSpec], t
 
 
 def _parse_norms(block: Mapping, scene: Mapping, where: str) -> tuple[str, ...]:
-    from signorini.fem.norm_names import UnknownNormError, parse_norm_name
+    from signorini.fem.norms.names import UnknownNormError, parse_norm_name
 
     norms = tuple(block.get("norms") or scene.get("norms") or PAPER_NORMS)
     for i, name in enumerate(norms):

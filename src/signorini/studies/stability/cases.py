@@ -153,7 +153,7 @@ def run_isolated(fn: Callable[[], object], timeout_s: float) -> tuple[str, objec
 
 def _solve_and_measure(disc, spec: SolverSpec, norms: Sequence[str], u_norms: Mapping[str, float]) -> dict:
     """Solve one case with one solver and measure everything (runs in the child process)."""
-    from signorini.fem.norms import evaluate_norms
+    from signorini.fem.norms.conventional import evaluate_norms
     from signorini.fem.solve import solve_discrete
     from signorini.solvers import EXACT_SOLVERS, kkt_certificate
 
@@ -272,7 +272,7 @@ def run_case(atlas: Atlas, case: Case) -> tuple[dict, dict[str, np.ndarray]]:
 
     Nothing raises: a failure to build the case fails every solver with that reason.
     """
-    from signorini.fem.norms import evaluate_norms
+    from signorini.fem.norms.conventional import evaluate_norms
 
     t0 = time.perf_counter()
     arrays: dict[str, np.ndarray] = {}

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 
 from signorini.fem.convergence import regression_slope
-from signorini.paper import CRITICAL_P, expected_order
 from signorini.plotting import new_figure, styled
+from signorini.published import CRITICAL_P, expected_order
 
 
 @styled

@@ -14,9 +14,9 @@ import numpy as np
 import pandas as pd
 
 from signorini.fem.convergence import eoc, regression_slope
-from signorini.fem.norm_names import parse_norm_name, true_name
-from signorini.paper import TABLE2_NORMS, expected_rate
+from signorini.fem.norms.names import parse_norm_name, true_name
 from signorini.pipeline.artifacts import atomic_write_text
+from signorini.published import TABLE2_NORMS, expected_rate
 
 INTRO = """\
 # Beyond the paper: the theory scene

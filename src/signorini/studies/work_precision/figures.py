@@ -8,8 +8,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from signorini.paper import PAPER_NORMS, label_tex
 from signorini.plotting import new_figure, save, styled
+from signorini.published import PAPER_NORMS, label_tex
 from signorini.studies.work_precision.study import FIGURE_NORMS
 from signorini.studies.work_precision.table import tolerance_order
 
@@ -38,7 +38,7 @@ def figure_series(df, table1_norms: Sequence[str] | None = None) -> list[str]:
     keeps them: the family's fastest run of status ok there; its first configuration otherwise).
     Beyond ``MAX_SERIES`` (the palette), only the first exact configuration of each start
     (cascade, cold) stays (a backend variant goes; its runs are in the CSV and the report)."""
-    from signorini.paper import TABLE1_NORMS
+    from signorini.published import TABLE1_NORMS
     from signorini.studies.work_precision.findings import fastest_to_digits, rank_key
 
     exact = list(dict.fromkeys(df.loc[df["tol_label"] == "exact", "config"]))
@@ -266,7 +266,7 @@ def cost_panel(df, ax=None):
 def _peer_lines(df, ax, colors: dict) -> None:
     """The drawn PETSc peers' (``figure_series``) time to Table 1's digits against the unknowns
     (dashed), with their exponents."""
-    from signorini.paper import TABLE1_NORMS
+    from signorini.published import TABLE1_NORMS
     from signorini.studies.work_precision.findings import peer_comparison
 
     n_dofs = df.drop_duplicates("N").set_index("N")["n_dofs"]

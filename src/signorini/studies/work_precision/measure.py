@@ -24,7 +24,7 @@ What is measured, per mesh ``N`` and per *solver configuration* (``study_configs
 - ``alg_<norm>``: the *algebraic error* ``‖u_h^solver − u_h^exact‖`` against the certified
   exact discrete solution of the source scene, in exact norms of a P1 function (``p1_norms``).
 - ``total_<norm>``: the *total error* ``‖u − u_h^solver‖`` with the pipeline's conventions
-  (``signorini.fem.norms.evaluate_norms``), and ``disc_<norm>``: the discretisation error
+  (``signorini.fem.norms.conventional.evaluate_norms``), and ``disc_<norm>``: the discretisation error
   ``‖u − u_h^exact‖`` read from the source scene's norm artifacts.
 
 The study reuses the source scene's assembled systems, exact solutions and norm artifacts
@@ -50,7 +50,7 @@ from typing import Any
 
 import numpy as np
 
-from signorini.fem.p1norms import p1_norms
+from signorini.fem.norms.p1 import p1_norms
 from signorini.pipeline.artifacts import load_json, save_json
 from signorini.studies.scene.store import SceneMesh, load_system, read_norm
 from signorini.studies.work_precision.study import EXACT_LABEL, GROWTH_EXPONENT, SolverConfig, accuracy_status
@@ -277,7 +277,7 @@ class _Inputs:
     disc_err: dict[str, float]
     build_s: float
     prev: dict[str, dict]
-    conventions: Any  # fem.norms.Conventions
+    conventions: Any  # fem.norms.conventions.Conventions
     peer: Any = None  # peers.PeerRoute of a PETSc peer's job
     timer: Timer = field(default_factory=Timer)
     kernel: ReferenceKernel | None = None
@@ -287,8 +287,8 @@ class _Inputs:
 
 def _load_inputs(at: SceneMesh, inputs: Mapping[str, Any], conventions: Mapping | None) -> _Inputs:
     """The source scene's system, exact solution and norm values (``inputs``, see ``measure_stage``)."""
-    from signorini.fem.conventions import Conventions
     from signorini.fem.discrete import DiscreteProblem
+    from signorini.fem.norms.conventions import Conventions
 
     disc_err = {name: read_norm(path, name, at.N) for name, path in inputs["disc"].items()}
     A, b, boundary = load_system(inputs["system"], at.N)
@@ -339,7 +339,7 @@ def _measure(inp: _Inputs, config: SolverConfig, tol: float | None, time_limit: 
     """Run one (configuration, tolerance) and record its status, times, residuals and errors;
     a failed run's answer (a peer stopped by an iteration limit) gets residuals and algebraic
     errors, but no total errors: it is no candidate for Table 1."""
-    from signorini.fem.norms import evaluate_norms
+    from signorini.fem.norms.conventional import evaluate_norms
 
     names = list(inp.disc_err)
     attempt = run_solver(config, inp.disc, tol, time_limit, inp.timer, inp.kernel, inp.peer, inp.start)

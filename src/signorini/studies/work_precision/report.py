@@ -10,7 +10,7 @@ import os
 from collections.abc import Mapping, Sequence
 
 from signorini.formatting import fmt_rel, fmt_time, h_label, md_table, sci_md
-from signorini.paper import TABLE1_NORMS, label_md
+from signorini.published import TABLE1_NORMS, label_md
 from signorini.studies.work_precision.timing import Protocol
 
 TIME_PROTOCOL = (

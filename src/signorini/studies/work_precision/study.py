@@ -9,7 +9,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 from signorini.fem.mesh import DEFAULT_DIAGONAL
-from signorini.paper import FIGURE3_NORMS
+from signorini.published import FIGURE3_NORMS
 
 FIGURE_NORMS = FIGURE3_NORMS  # the panel rows of work_precision.{pdf,png}
 EXACT_LABEL = "exact"  # the tolerance label of the exact (active-set) runs

@@ -1,10 +1,10 @@
 """The conventions of the paper's norms: the choices its text leaves open, and their allowed values.
 
-A norm name (``fem.norm_names``) says which norm; a ``Conventions`` says how the paper evaluates
-it (``fem.norms``): the triangle rule of the integrals, the point sets of the maxima, the form of
+A norm name (``fem.norms.names``) says which norm; a ``Conventions`` says how the paper evaluates
+it (``fem.norms.conventional``): the triangle rule of the integrals, the point sets of the maxima, the form of
 the ``W^{1,p}`` norm and the formula of the ``H^{1/2}(∂Ω)`` estimate.  The ``W^{1,p}`` form and the
-``H^{1/2}`` formula also define the ``<name>_true`` norms (``fem.true_norms``) and the exact norms
-of a P1 function (``fem.p1norms``).  Kept apart from the norms so that each of those modules (and
+``H^{1/2}`` formula also define the ``<name>_true`` norms (``fem.norms.true``) and the exact norms
+of a P1 function (``fem.norms.p1``).  Kept apart from the norms so that each of those modules (and
 the workflow's config check) can import it without importing the others.
 """
 

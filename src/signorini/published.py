@@ -1,14 +1,14 @@
 """The paper's facts, defined once: the norms of its Tables 1–2 and Figure 3, their labels
 (Markdown, LaTeX, matplotlib) and the expected orders of convergence as a function of the norm.
 
-Norm names follow the grammar of ``signorini.fem.norm_names``.
+Norm names follow the grammar of ``signorini.fem.norms.names``.
 """
 
 from __future__ import annotations
 
 import math
 
-from signorini.fem.norm_names import NormName, parse_norm_name
+from signorini.fem.norms.names import NormName, parse_norm_name
 
 TABLE1_NORMS = ("L4", "Linf", "W14", "W1inf", "H12")
 TABLE2_NORMS = ("L4", "L16", "Linf", "W14", "W116", "W1inf", "H12")

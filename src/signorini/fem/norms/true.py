@@ -53,10 +53,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from signorini.fem.boundary import singular_points
-from signorini.fem.conventions import Conventions
 from signorini.fem.derivatives import derivative_bounds, u_and_grad_u
-from signorini.fem.norm_names import parse_norm_name
-from signorini.fem.norms import (
+from signorini.fem.norms.conventional import (
     ErrorField,
     boundary_error,
     boundary_l2_norm,
@@ -64,6 +62,8 @@ from signorini.fem.norms import (
     h12_interpolation_norm,
     power_scale,
 )
+from signorini.fem.norms.conventions import Conventions
+from signorini.fem.norms.names import parse_norm_name
 from signorini.fem.quadrature import gauss_legendre_01, stroud_conical
 
 if TYPE_CHECKING:
@@ -499,7 +499,7 @@ def evaluate_named_norms(
     details: bool = False,
 ) -> dict[str, float] | dict[str, float | TrueNorm]:
     """Every named norm of ``u − u_h``, the one dispatcher between the two kinds: the names under
-    the conventions in one pass of ``fem.norms.evaluate_norms`` (each chunk's error field shared
+    the conventions in one pass of ``fem.norms.conventional.evaluate_norms`` (each chunk's error field shared
     by all of them; each value the one the name alone gives, bit for bit), and every
     ``<name>_true`` by ``true_norm``.  The values as floats; with ``details``, a ``_true`` name
     maps to its ``TrueNorm`` (value, error estimate, levels)."""

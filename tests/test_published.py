@@ -1,4 +1,4 @@
-"""The paper's facts (``signorini.paper``): the expected rates of every norm."""
+"""The paper's facts (``signorini.published``): the expected rates of every norm."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import math
 
 import pytest
 
-from signorini.fem.norm_names import parse_norm_name
-from signorini.paper import THEORETICAL_ORDERS, expected_rate
+from signorini.fem.norms.names import parse_norm_name
+from signorini.published import THEORETICAL_ORDERS, expected_rate
 
 
 @pytest.mark.parametrize(

@@ -1,4 +1,4 @@
-"""The errors stage (``signorini.studies.scene.errors``) at the end of the scene's chain of stages."""
+"""The errors stage (``signorini.studies.scene.error_table``) at the end of the scene's chain of stages."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from helpers import PROBLEM, solve_chain
 from signorini.fem.mesh import mesh_width
 from signorini.pipeline.artifacts import load_json, load_npz
 from signorini.studies.scene.eoc import eoc_stage
-from signorini.studies.scene.errors import errors_stage
+from signorini.studies.scene.error_table import errors_stage
 from signorini.studies.scene.norm import norm_stage
 from signorini.studies.scene.store import SceneMesh
 

@@ -7,15 +7,15 @@
 ``H1``         ``H¹(Ω)``
 ``H12``        ``H^{1/2}(∂Ω)``
 ``L2boundary`` ``L²(∂Ω)``
-``<name>_true`` the same norm evaluated to a stated accuracy (``fem.true_norms``), for every
+``<name>_true`` the same norm evaluated to a stated accuracy (``fem.norms.true``), for every
                name above: ``L4_true``, ``Linfplus_true``, ``W1inf_true``, ``H12_true``
 =============  =====================================================================
 
-A name without the suffix is evaluated with the paper's conventions (``fem.conventions.Conventions``:
+A name without the suffix is evaluated with the paper's conventions (``fem.norms.conventions.Conventions``:
 fixed rules and point sets); with it, to a relative accuracy of about 1e-4 with an error estimate.
 
-``parse_norm_name`` is the only parser: the norms (``fem.norms``), the exact norms of a P1
-function (``fem.p1norms``), the expected rates and the labels (``signorini.paper``) all use it.
+``parse_norm_name`` is the only parser: the norms (``fem.norms.conventional``), the exact norms of a P1
+function (``fem.norms.p1``), the expected rates and the labels (``signorini.published``) all use it.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Norms of e = u − u_h (``signorini.fem.norms``) where the answer is known in closed form, and the
+"""Norms of e = u − u_h (``signorini.fem.norms.conventional``) where the answer is known in closed form, and the
 norm-name registry.
 
 ``error_field`` only calls ``problem.u(x)`` and ``problem.grad_u(x)``, so small
@@ -15,9 +15,8 @@ import numpy as np
 import pytest
 from numpy.polynomial.legendre import leggauss
 
-from signorini.fem.conventions import MAX_POINTS, QUADRATURES, W1P_FORMS
 from signorini.fem.mesh import friedrichs_keller
-from signorini.fem.norms import (
+from signorini.fem.norms.conventional import (
     Conventions,
     UnknownNormError,
     boundary_h1_seminorm,
@@ -32,6 +31,7 @@ from signorini.fem.norms import (
     w1inf_norm,
     w1p_norm,
 )
+from signorini.fem.norms.conventions import MAX_POINTS, QUADRATURES, W1P_FORMS
 
 PAPER_NORMS = ["L4", "L16", "Linf", "W14", "W116", "W1inf", "H12"]
 
@@ -366,7 +366,7 @@ def test_p1_at_points_matches_scikit_fem_interpolation():
     from skfem import CellBasis, ElementTriP1
 
     from signorini.fem.mesh import friedrichs_keller
-    from signorini.fem.norms import p1_at_points
+    from signorini.fem.norms.conventional import p1_at_points
     from signorini.fem.quadrature import dunavant8
 
     for diagonal in ("sw_ne", "nw_se"):
@@ -386,7 +386,7 @@ def test_p1_at_points_matches_scikit_fem_interpolation():
 def test_chunked_evaluation_equals_whole_field(chunk):
     """evaluate_norms over chunks of triangles gives the single-pass values."""
     from signorini.fem.discrete import build
-    from signorini.fem.norms import evaluate_norms
+    from signorini.fem.norms.conventional import evaluate_norms
     from signorini.fem.problem import Problem
     from signorini.fem.solve import solve_discrete
 
@@ -403,7 +403,7 @@ def test_chunked_evaluation_equals_whole_field(chunk):
 def test_scaled_power_sums_equal_the_plain_formula_in_range():
     """Scaling by a power of two changes no bit where the plain formula neither overflows nor
     underflows, so the paper's tables are unchanged by it."""
-    from signorini.fem.norms import scaled_p_sum
+    from signorini.fem.norms.conventional import scaled_p_sum
 
     rng = np.random.default_rng(7)
     for p in (2.0, 4.0, 16.0, 32.0):
@@ -417,7 +417,7 @@ def test_every_norm_scales_with_the_amplitude(amplitude):
     """u, u_h and every norm of u - u_h are linear in A: no power |e|^p may overflow (A = 10^300,
     or p = 32 at A = 10^12) or underflow to a silent zero (p = 32 at A = 10^-12)."""
     from signorini.fem.discrete import build
-    from signorini.fem.norms import evaluate_norms
+    from signorini.fem.norms.conventional import evaluate_norms
     from signorini.fem.problem import Problem
     from signorini.fem.solve import solve_discrete
 

@@ -19,11 +19,11 @@ from signorini.fem.boundary import boundary_rule, singular_points
 from signorini.fem.derivatives import ManufacturedBounds, derivative_bounds, u_and_grad_u
 from signorini.fem.discrete import build
 from signorini.fem.mesh import friedrichs_keller
-from signorini.fem.norm_names import UnknownNormError, parse_norm_name, true_name
-from signorini.fem.norms import Conventions, boundary_error, evaluate_norms, parse_norm
+from signorini.fem.norms.conventional import Conventions, boundary_error, evaluate_norms, parse_norm
+from signorini.fem.norms.names import UnknownNormError, parse_norm_name, true_name
+from signorini.fem.norms.true import RTOL, evaluate_named_norms, true_norm
 from signorini.fem.problem import Problem
-from signorini.fem.true_norms import RTOL, evaluate_named_norms, true_norm
-from signorini.paper import label_md
+from signorini.published import label_md
 
 X0 = 0.5 + 0.3 / 7  # inside a bottom boundary edge of the N = 7 mesh, not at its midpoint
 
@@ -156,7 +156,7 @@ def test_malformed_true_names_are_rejected(name):
 
 
 def test_a_true_name_is_evaluated_by_the_dispatcher_not_under_the_conventions():
-    with pytest.raises(UnknownNormError, match="true_norms"):
+    with pytest.raises(UnknownNormError, match="fem.norms.true"):
         parse_norm("L4_true")
     mesh, problem = friedrichs_keller(7), Harmonic()
     zero = np.zeros(mesh.p.shape[1])
@@ -373,32 +373,6 @@ def test_true_tables_stage_renders_convention_true_and_printed_values(tmp_path):
     assert "| L⁴(Ω) | -0.99 % … +0.00 % | -0.99 % … +4.00 % | 4.0e-06 |" in outs["table1_md"].read_text()
 
 
-def test_true_norm_artifacts_of_the_second_case_carry_their_accuracy(built_repo):
-    from signorini.pipeline.artifacts import load_json
-
-    for name in ("L4_true", "Linf_true", "W14_true", "W1inf_true", "H12_true"):
-        art = load_json(built_repo / f"results/case2/N241/norms/{name}.json")
-        acc = art["quadrature_error"]
-        assert acc["converged"] and acc["rtol"] == RTOL and len(acc["levels"]) >= 2
-        assert acc["error_estimate"] <= RTOL * art["value"]
-        assert acc["levels"][-1]["value"] == art["value"]
-
-
-def test_true_norms_target_renders_every_norm_of_table_2(built_repo):
-    """The test workflow renders the smoke scene (N = 11, 21, 41): a row per mesh and norm, converged."""
-    import pandas as pd
-
-    from signorini.paper import TABLE2_NORMS
-
-    t1 = pd.read_csv(built_repo / "paper_figures/table1_true.csv")
-    assert list(t1["norm"]) == list(TABLE2_NORMS) * 3 and list(t1["h"].unique()) == ["1/11", "1/21", "1/41"]
-    assert (t1["quadrature_error"] <= RTOL * t1["true"]).all()
-    assert t1["paper"].isna().all()  # the paper has no row for these meshes
-    t2 = pd.read_csv(built_repo / "paper_figures/table2_true.csv")
-    assert list(t2.columns) == ["h", *(true_name(n) for n in TABLE2_NORMS)]
-    assert "## Gap per norm" in (built_repo / "paper_figures/table1_true.md").read_text()
-
-
 # --- the bounds that let the maxima exclude triangles ------------------------------------------
 
 
@@ -523,7 +497,7 @@ def _bound_ratios(problem, apex) -> tuple[dict[str, tuple[np.ndarray, np.ndarray
     its lattice (``_piece_bounds``) is above the sup."""
     from skfem import MeshTri
 
-    from signorini.fem import true_norms as tn
+    from signorini.fem.norms import true as tn
 
     v = _pieces(apex)
     K = v.shape[2]
@@ -567,7 +541,7 @@ def test_an_understated_bound_is_caught():
 
 def test_the_interpolation_radius_is_the_largest_weighted_distance_to_the_vertices():
     """max over the triangle of Σ λᵢ |x − vᵢ|² is ρ² (acute, right-angled and obtuse triangles)."""
-    from signorini.fem import true_norms as tn
+    from signorini.fem.norms import true as tn
 
     v = np.array([[[0, 1, 0.4], [0, 0, 0.9]], [[0, 1, 0], [0, 0, 1]], [[0, 1, 0.5], [0, 0, 0.1]]], dtype=float)
     v = v.transpose(1, 2, 0)  # (2, 3, 3)
@@ -586,7 +560,7 @@ def test_pruned_maxima_equal_the_exhaustive_evaluation(cache, N):
     beyond the cut-off, where e is affine) against
     the lattice of every triangle with local maximisation: the same value to rtol, inside the
     enclosure the branch and bound states."""
-    from signorini.fem.true_norms import _sampled_max_norm
+    from signorini.fem.norms.true import _sampled_max_norm
 
     mesh, u_h = cache.discrete({}, N).mesh, cache.solution({}, N).u
     cases = [("Linf", Conventions()), ("Linfplus", Conventions()), ("Linfminus", Conventions())]
@@ -621,7 +595,7 @@ def test_pruned_maxima_of_the_singular_function(name):
 def _uniform(problem, mesh, u_h, name: str, level: int, conv: Conventions) -> float:
     """The norm with every triangle at the rule of ``level`` (``INTEGRAL_LEVELS``; the graded rule of
     ``NEAR_LEVELS`` near the singular point), no closed form."""
-    from signorini.fem import true_norms as tn
+    from signorini.fem.norms import true as tn
 
     spec = parse_norm_name(name)
     plain, gradient = tn._integrand(spec, conv.w1p_form)
@@ -666,7 +640,7 @@ def test_integral_norms_agree_with_every_triangle_at_the_finest_rule(cache, N):
 def test_the_closed_form_where_u_is_affine_equals_a_rule_that_is_exact_there():
     """Where u ≡ 0 (beyond the cut-off) e = −u_h is affine: ∫ e^p by the complete homogeneous
     polynomial equals the 12 × 12 conical rule (degree 23 ≥ p) for every integrand with even p."""
-    from signorini.fem import true_norms as tn
+    from signorini.fem.norms import true as tn
 
     problem, mesh = Problem(), friedrichs_keller(21)
     u_h = np.random.default_rng(1).normal(size=mesh.p.shape[1]) * 0.1

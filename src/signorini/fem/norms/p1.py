@@ -13,8 +13,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from signorini.fem.conventions import Conventions
-from signorini.fem.norm_names import NormName, parse_norm_name
+from signorini.fem.norms.conventions import Conventions
+from signorini.fem.norms.names import NormName, parse_norm_name
 
 if TYPE_CHECKING:
     from collections.abc import Sequence

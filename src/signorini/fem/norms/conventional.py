@@ -16,9 +16,9 @@ Gauss points of the boundary edges.  A norm is requested by name:
 ``L4plus`` / ``L4minus``  ``‖(u - u_h)^±‖_{L⁴}``; any ``Lp`` works with the suffixes
 =========  =====================================================================
 
-These are the paper's conventions (``fem.conventions``: fixed rules and point sets).  The same
+These are the paper's conventions (``fem.norms.conventions``: fixed rules and point sets).  The same
 norms evaluated to a stated accuracy, with an error estimate, are the ``<name>_true`` norms of
-``fem.true_norms`` (whose ``evaluate_named_norms`` takes a list of both kinds).
+``fem.norms.true`` (whose ``evaluate_named_norms`` takes a list of both kinds).
 """
 
 from __future__ import annotations
@@ -29,8 +29,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from signorini.fem.boundary import boundary_rule
-from signorini.fem.conventions import Conventions
-from signorini.fem.norm_names import UnknownNormError, parse_norm_name
+from signorini.fem.norms.conventions import Conventions
+from signorini.fem.norms.names import UnknownNormError, parse_norm_name
 from signorini.fem.problem import Problem
 from signorini.fem.quadrature import dunavant8, stroud_conical
 
@@ -100,7 +100,7 @@ def p1_at_points(
     The affine P1 map written out (barycentrics λ = (1 - ξ - η, ξ, η)): scikit-fem's
     ``CellBasis`` does the same in general but builds (3, 2, elements, q) basis arrays,
     which at N = 501 costs 3 s and 1 GiB per rule; this costs 0.2 s.  Tested against
-    ``CellBasis.interpolate`` in tests/fem/test_norms.py.
+    ``CellBasis.interpolate`` in tests/fem/norms/test_conventional.py.
     """
     lam = np.vstack([1.0 - X[0] - X[1], X[0], X[1]])  # (3, q)
     v = p[:, t]  # (2, 3, elements)
@@ -286,11 +286,11 @@ def h12_interpolation_norm(f: ErrorField) -> float:
 
 
 def parse_norm(name: str):
-    """Map a norm name (``fem.norm_names``) to a function of an ``ErrorField``; raises ``UnknownNormError``
-    (also for a ``_true`` name: those are evaluated by ``fem.true_norms``)."""
+    """Map a norm name (``fem.norms.names``) to a function of an ``ErrorField``; raises ``UnknownNormError``
+    (also for a ``_true`` name: those are evaluated by ``fem.norms.true``)."""
     spec = parse_norm_name(name)
     if spec.true:
-        raise UnknownNormError(f"{name!r} is not a function of an error field: evaluate it with fem.true_norms")
+        raise UnknownNormError(f"{name!r} is not a function of an error field: evaluate it with fem.norms.true")
     if spec.family == "H12":
         return h12_interpolation_norm
     if spec.family == "H1":
@@ -332,11 +332,11 @@ def evaluate_norms(
     (bounded memory).  All names share the evaluations of one chunk: ``e`` and ``∇e`` at the points
     of each rule are computed once for all the norms that need them, and each value is the one the
     name alone gives, bit for bit.  A ``_true`` name raises ``UnknownNormError``: those are
-    evaluated by ``fem.true_norms`` (``evaluate_named_norms`` takes both kinds)."""
+    evaluated by ``fem.norms.true`` (``evaluate_named_norms`` takes both kinds)."""
     true = [name for name in names if parse_norm_name(name).true]
     if true:
         raise UnknownNormError(
-            f"{true}: a _true norm is evaluated to a stated accuracy by fem.true_norms "
+            f"{true}: a _true norm is evaluated to a stated accuracy by fem.norms.true "
             "(true_norm, or evaluate_named_norms for a mixed list), not under the conventions"
         )
     reductions = {name: _reduction(name) for name in names}

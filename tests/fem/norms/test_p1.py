@@ -1,6 +1,6 @@
-"""Exact norms of a P1 function (``signorini.fem.p1norms``) against closed forms.
+"""Exact norms of a P1 function (``signorini.fem.norms.p1``) against closed forms.
 
-They are compared with the quadrature norms of ``fem.norms`` in
+They are compared with the quadrature norms of ``fem.norms.conventional`` in
 ``tests/studies/work_precision/test_measure.py``.
 """
 
@@ -10,9 +10,9 @@ import math
 
 import pytest
 
-from signorini.fem.conventions import Conventions
 from signorini.fem.mesh import friedrichs_keller
-from signorini.fem.p1norms import p1_norms
+from signorini.fem.norms.conventions import Conventions
+from signorini.fem.norms.p1 import p1_norms
 
 
 def test_norms_of_x1_are_the_closed_forms_and_scale_with_the_function():

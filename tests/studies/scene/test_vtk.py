@@ -1,4 +1,4 @@
-"""Stage ``vtk`` (``signorini.studies.scene.export``): one solution of a scene for ParaView."""
+"""Stage ``vtk`` (``signorini.studies.scene.vtk``): one solution of a scene for ParaView."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ from helpers import read_vtu
 
 from signorini.fem.mesh import boundary_nodes
 from signorini.pipeline.artifacts import load_npz
-from signorini.studies.scene.export import vtk_stage
+from signorini.studies.scene.vtk import vtk_stage
 
 
 def test_the_vtu_holds_the_solution_its_error_the_multiplier_and_the_contact_set(solved, tmp_path):

@@ -1,4 +1,4 @@
-"""The grammar of norm names (``signorini.fem.norm_names``): what a name parses into, its one
+"""The grammar of norm names (``signorini.fem.norms.names``): what a name parses into, its one
 spelling, and the names outside the grammar."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from signorini.fem.norm_names import (
+from signorini.fem.norms.names import (
     UnknownNormError,
     canonical_norm_name,
     lp_names,

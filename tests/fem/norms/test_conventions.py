@@ -1,10 +1,10 @@
-"""The evaluation conventions of the discrete norms (``signorini.fem.conventions``)."""
+"""The evaluation conventions of the discrete norms (``signorini.fem.norms.conventions``)."""
 
 from __future__ import annotations
 
 import pytest
 
-from signorini.fem.conventions import H12_FORMS, QUADRATURES, W1P_FORMS, Conventions
+from signorini.fem.norms.conventions import H12_FORMS, QUADRATURES, W1P_FORMS, Conventions
 
 
 @pytest.mark.parametrize(
