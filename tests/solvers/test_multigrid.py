@@ -171,3 +171,22 @@ def test_smoothed_aggregation_gives_the_same_solution(cache):
     mg = multigrid_solve(disc.A, disc.b, disc.boundary, amg="smoothed_aggregation", max_coarse=SMALL_COARSE)
     assert_same_solution(mg, direct)
     assert mg.info["amg"] == "smoothed_aggregation" and mg.info["levels"] >= 2
+
+
+def test_abs_product_is_the_product_with_the_absolute_matrix_bit_for_bit(monkeypatch):
+    """``|A| y`` a block of rows at a time, empty rows and block edges included, equals the CSR
+    product with ``|A|`` in every bit (the same summation order per row)."""
+    from signorini.solvers import multigrid
+
+    rng = np.random.default_rng(3)
+    signed = sp.random(300, 300, density=0.05, random_state=4) - sp.random(300, 300, density=0.05, random_state=5)
+    A = sp.lil_matrix(signed)
+    A[7, :] = 0.0  # a row that stores nothing
+    A = sp.csr_matrix(A)
+    A.eliminate_zeros()
+    y = rng.standard_normal(300)
+    expected = abs(A) @ y
+    for rows in (1 << 20, 64, 7):
+        monkeypatch.setattr(multigrid, "ABS_CHUNK_ROWS", rows)
+        got = multigrid.abs_product(A, y)
+        assert got.tobytes() == expected.tobytes() and got[7] == 0.0

@@ -106,8 +106,10 @@ class GalerkinHierarchy:
 
     def __init__(self, A: sp.csr_matrix, kind: str = "classical", max_coarse: int = 500):
         self.A = A
-        self.rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
         self.levels = hierarchy(A, kind, max_coarse).levels
+        # the row of each stored entry, made after the set-up's temporaries are gone (peak memory)
+        index = np.int32 if A.shape[0] < 2**31 else np.int64
+        self.rows = np.repeat(np.arange(A.shape[0], dtype=index), np.diff(A.indptr))
         for level in self.levels[:-1]:  # smoothed aggregation's transfers are BSR
             level.P, level.R = sp.csr_matrix(level.P), sp.csr_matrix(level.R)
         for level in self.levels[1:]:
@@ -184,6 +186,22 @@ class GalerkinHierarchy:
         return x
 
 
+ABS_CHUNK_ROWS = 1 << 20  # rows of |A| formed at a time by ``abs_product``
+
+
+def abs_product(A: sp.csr_matrix, y: np.ndarray) -> np.ndarray:
+    """``|A| y`` for a CSR matrix, formed a block of rows at a time (no copy of ``A``'s values:
+    at N = 4001 one is 0.9 GB)."""
+    out = np.empty(A.shape[0])
+    for start in range(0, A.shape[0], ABS_CHUNK_ROWS):
+        stop = min(start + ABS_CHUNK_ROWS, A.shape[0])
+        lo, hi = A.indptr[start], A.indptr[stop]
+        products = np.abs(A.data[lo:hi]) * y[A.indices[lo:hi]]
+        rows = np.repeat(np.arange(stop - start), np.diff(A.indptr[start : stop + 1]))
+        out[start:stop] = np.bincount(rows, weights=products, minlength=stop - start)
+    return out
+
+
 def pcg(
     A: sp.csr_matrix,
     rhs: np.ndarray,
@@ -234,10 +252,9 @@ class MultigridSystems:
     def __init__(self, A: sp.csr_matrix, b: np.ndarray, start: np.ndarray, options: dict):
         self.A, self.b, self.x = A, b, start
         self.tol, self.inner_rtol, self.max_cg_iter = options["tol"], options["inner_rtol"], options["max_cg_iter"]
-        self.abs_A = sp.csr_matrix((np.abs(A.data), A.indices, A.indptr), shape=A.shape)
         ones = np.ones(b.size)
         # A 1 = 0 to round-off (c = 0: A = K): singular unless some node is clamped
-        self.singular = np.abs(A @ ones).max() <= 16 * np.finfo(float).eps * (self.abs_A @ ones).max()
+        self.singular = np.abs(A @ ones).max() <= 16 * np.finfo(float).eps * abs_product(A, ones).max()
         t0 = time.perf_counter()
         self.hierarchy = GalerkinHierarchy(A, options["amg"], options["max_coarse"])
         self.amg, self.setup_s, self.update_s = options["amg"], time.perf_counter() - t0, 0.0
@@ -248,7 +265,7 @@ class MultigridSystems:
         """Restart CG from the true residual while it exceeds its rounding floor (max norm)."""
         At, iterations = self.hierarchy.matrix, 0
         for _ in range(REFINEMENTS):
-            floor = FLOOR_FACTOR * np.finfo(float).eps * np.where(free, self.abs_A @ np.abs(x), 0.0).max()
+            floor = FLOOR_FACTOR * np.finfo(float).eps * np.where(free, abs_product(self.A, np.abs(x)), 0.0).max()
             if np.abs(rhs - At @ x).max() <= floor:
                 break
             x, k, _ = pcg(At, rhs, x, self.hierarchy, self.tol, self.max_cg_iter)
