@@ -70,7 +70,7 @@ dag: setup
 
 ## report: the Snakemake report of every result that exists (built here or committed): results/report.html
 report: setup
-	@$(BIN)/python -m signorini.pipeline.report build
+	@$(BIN)/python -m signorini.studies.report build
 
 ## bench: wall time of a cold `snakemake -c2 all`, a no-op rerun and a dry run (medians of 5) -> results/benchmarks/bench.json
 bench: setup

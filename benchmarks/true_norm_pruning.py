@@ -25,6 +25,7 @@ import argparse
 import importlib.util
 import json
 import os
+import re
 import subprocess
 import sys
 import time
@@ -42,7 +43,13 @@ from signorini.published import TABLE2_NORMS  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 PROBLEM = {"x0": 0.5, "R": 0.45, "A": 10.0, "c": 1.0}
-MODULE = "src/signorini/fem/norms/true.py"
+OLD_MODULE = "src/signorini/fem/true_norms.py"  # its path at the baseline
+# the modules it imports, as they are named in this tree
+OLD_IMPORTS = {
+    "signorini.fem.conventions": "signorini.fem.norms.conventions",
+    "signorini.fem.norm_names": "signorini.fem.norms.names",
+    "signorini.fem.norms": "signorini.fem.norms.conventional",
+}
 
 
 def load_avg() -> list[float]:
@@ -67,16 +74,18 @@ def module(which: str, baseline: str):
 
         return new
     source = subprocess.run(
-        ["git", "-C", str(ROOT), "show", f"{baseline}:{MODULE}"],
+        ["git", "-C", str(ROOT), "show", f"{baseline}:{OLD_MODULE}"],
         check=True,
         capture_output=True,
         text=True,
         encoding="utf-8",
     ).stdout
+    for old_name, name in OLD_IMPORTS.items():
+        source = re.sub(rf"^(\s*)from {re.escape(old_name)} import", rf"\1from {name} import", source, flags=re.M)
     spec = importlib.util.spec_from_loader("old_true_norms", loader=None)
     old = importlib.util.module_from_spec(spec)
     sys.modules["old_true_norms"] = old  # dataclasses look their module up
-    exec(compile(source, f"{baseline}:{MODULE}", "exec"), old.__dict__)
+    exec(compile(source, f"{baseline}:{OLD_MODULE}", "exec"), old.__dict__)
     return old
 
 

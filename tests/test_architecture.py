@@ -36,6 +36,15 @@ def test_the_mathematics_imports_no_study_plotting_io_or_tables(layer):
         assert not bad, f"{path.relative_to(ROOT)} imports {bad}"
 
 
+def test_the_workflow_infrastructure_imports_no_study():
+    """pipeline/ stands below the studies: it imports none of them, nor the plotting, the
+    notebooks' helpers or the command line (not even inside a function)."""
+    banned = ("signorini.studies", "signorini.plotting", "signorini.explore", "signorini.cli")
+    for path in sorted((PACKAGE / "pipeline").rglob("*.py")):
+        bad = sorted(n for n in imported_names(path) if n.startswith(banned))
+        assert not bad, f"{path.relative_to(ROOT)} imports {bad}"
+
+
 def import_graph(src: Path = SRC) -> dict[str, set[str]]:
     """{module: the package modules it imports}, at module level or inside a function (not under
     ``TYPE_CHECKING``: those never run); ``from a import b`` counts as importing ``a.b`` when that

@@ -1,4 +1,4 @@
-"""The Snakemake report (``make report``, ``signorini.pipeline.report``): every table and figure
+"""The Snakemake report (``make report``, ``signorini.studies.report``): every table and figure
 that exists is in it with its caption, the Markdown outputs as inline HTML pages; it says per
 study whether it was built here or comes from the committed files, and works on a fresh clone."""
 
@@ -16,8 +16,8 @@ from pathlib import Path
 import pytest
 from helpers import ROOT, clone_built, copy_repo
 
-from signorini.pipeline import report
 from signorini.pipeline.paths import FIGURES, REPORT_CONTENTS, REPORT_PAGES, TARGETS, report_page
+from signorini.studies import report
 
 CATEGORIES = {
     "all": "Paper",
@@ -39,7 +39,7 @@ def embedded(html: str, name: str) -> dict:
 def make_report(repo: Path) -> subprocess.CompletedProcess:
     """What ``make report`` runs, in ``repo``."""
     return subprocess.run(
-        [sys.executable, "-m", "signorini.pipeline.report", "build"],
+        [sys.executable, "-m", "signorini.studies.report", "build"],
         cwd=repo, capture_output=True, text=True, timeout=900,
         env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1", "PYTHONPATH": str(repo / "src")},
     )

@@ -1,9 +1,9 @@
-# The report's pages (make report; signorini.pipeline.report): every Markdown output, and each
+# The report's pages (make report; signorini.studies.report): every Markdown output, and each
 # scene's errors and EOCs, as an HTML page, which Snakemake's report shows inline (other text
 # files it offers only as downloads). A page renders the file as it is: its source is a parameter
 # with its digest (an edited source reruns the page), not an input, so that rendering the
 # committed findings of a study never recomputes the study. Not part of any study's target.
-from signorini.pipeline import report as report_lib
+from signorini.studies import report as report_lib
 
 # page: (caption in workflow/report/, category, subcategory), as the rule that writes its source
 REPORT_PAGES = {

@@ -2,7 +2,7 @@
 scene's errors and EOCs) as an HTML page that the Snakemake report shows inline."""
 
 from signorini.pipeline.joblog import job_log
-from signorini.pipeline.report import page_stage
+from signorini.studies.report import page_stage
 
 snakemake = globals()["snakemake"]  # injected by the script: directive
 

@@ -120,7 +120,7 @@ RENDER_INPUTS = {
     "work_precision_report": ("work_precision_table",),
 }
 
-# The report's pages (signorini.pipeline.report): {page: the Markdown output it shows inline}, each
+# The report's pages (signorini.studies.report): {page: the Markdown output it shows inline}, each
 # rendered to results/report/<page>.html; and one page per scene with its errors and EOCs.
 REPORT_DIR = "results/report"
 REPORT_PAGES = {

@@ -326,7 +326,6 @@ def test_fair_race_same_warm_start_and_cold_against_cold():
     assert "same warm start: ours" in md and "cold against cold: ours_cold" in md
 
 
-
 def test_figure_draws_the_fastest_configuration_per_family_with_the_legend_below():
     """Exact solvers plus one configuration per solver family (the fastest to Table 1's digits on
     the finest mesh, in reference units), at most eight, Okabe–Ito colours, legends below the axes."""
