@@ -299,7 +299,7 @@ def _check_scene(where: str, scene: Mapping, limit: int, available: str, node: N
     Ns = scene.get("N", [])
     check_mesh_sizes(f"{where}.N", Ns)
     for i, N in enumerate(Ns):
-        check_memory(f"{where}.N[{i}]", N, limit, available, scene.get("solver") or "active_set")
+        check_memory(f"{where}.N[{i}]", N, limit, available, scene["solver"])  # filled by the scene defaults
     problem = check_options(f"{where}.solver_options", scene.get("solver", ""), scene.get("solver_options") or {})
     if problem:
         raise ConfigError(problem)

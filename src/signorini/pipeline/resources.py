@@ -1,11 +1,12 @@
 """Memory and run-time requests of the per-mesh jobs, defined once: the rules' ``resources`` and
 the config check's bound use them.  Memory grows with the number of unknowns, (N + 1)² ≈ N²; the
-constants follow the peaks measured at N = 2001 (discretise 0.9 GB, solve 7.5 GB by the direct
-route and 2.9 GB by the multigrid route, a norm ≤ 1.3 GB, theory_quantities 4.9 GB) with some
-headroom; a solve job's request follows the route its scene's solver takes on that mesh.  Run
-times at N = 2001 on a loaded 2-CPU machine (load about 4): discretise 130 s, solve 216 s, a norm
-20–80 s, theory_quantities 228 s; the requests are about ten times these, since a job that
-outlives its request is killed."""
+constants follow the peaks measured at N = 2001 (``docs/evidence/scale.json``: discretise
+0.9 GiB, solve 7.6 GiB by the direct route and 2.9 GiB by the multigrid route, a mesh's 20
+convention norms in one job 1.9 GiB, theory_quantities 5.3 GiB) with some headroom; a solve
+job's request follows the route its scene's solver takes on that mesh.  Run times at N = 2001
+on a loaded 2-CPU machine (load about 4): discretise 130 s, solve 216 s, a norm 20–80 s,
+theory_quantities 228 s; the requests are about ten times these, since a job that outlives its
+request is killed."""
 
 from __future__ import annotations
 

@@ -21,8 +21,10 @@ What inflates a solver's wall time on a shared machine, and what this protocol d
 4. **Short calls**: a call whose first run took less than ``min_sample_s`` (wall time of the
    whole call: a peer's includes its interpreter's start, which its own timer leaves out) is run
    ``calls`` times in a row per later sample (as ``timeit`` does), enough to last
-   ``min_sample_s``; the sample's times are per call.  A 0.27 s call's single samples ranged
-   over ±35 % on a quiet machine (allocation, caches, clock), a batch's over a few per cent.
+   ``min_sample_s``; the sample's times are per call, so a call of milliseconds is not timed
+   near the clocks' resolution.  It does not remove the variation of the CPU time itself from
+   one second to the next: on a quiet machine the batches of a 0.3 s call (N = 201) still spread
+   by about 28 %, as its single calls did (``docs/evidence/timing_robustness*.json``).
 5. **Noise**: a measurement is repeated until ``min_repeats`` samples agree within ``spread``
    (relative range of their reference-unit times), at most ``max_repeats`` times and no new
    sample after ``budget_s`` seconds (a call longer than that is timed once: it averages the
