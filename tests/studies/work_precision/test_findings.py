@@ -44,3 +44,15 @@ def test_ranks_starts_peers_and_numeric_columns(measurements):
     flags = measurements.assign(loaded=["True", False, True, None] * 3)
     np.testing.assert_array_equal(pd_numeric(flags, "loaded")[:4], [1.0, 0.0, 1.0, math.nan])
     assert np.isnan(pd_numeric(measurements, "no_such_column")).all()
+
+
+def test_concurrent_jobs_counts_the_largest_overlap_of_job_intervals():
+    """Back-to-back jobs (one ends as the next starts) never ran together; nested ones did."""
+    from signorini.studies.work_precision.findings import concurrent_jobs
+
+    one_core = np.array([0.0, 10.0, 25.0]), np.array([10.0, 25.0, 30.0])
+    assert concurrent_jobs(*one_core) == 1
+    # [0, 11) and [1, 12) overlap, as do [12, 20) and [13, 14); a NaN (a skipped job) is left out
+    two_cores = np.array([0.0, 1.0, 12.0, 13.0, np.nan]), np.array([11.0, 12.0, 20.0, 14.0, np.nan])
+    assert concurrent_jobs(*two_cores) == 2
+    assert concurrent_jobs(np.array([0.0, 1.0, 2.0]), np.array([9.0, 9.0, 9.0])) == 3

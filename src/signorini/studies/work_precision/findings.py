@@ -371,18 +371,34 @@ def pd_numeric(df: pd.DataFrame, name: str) -> np.ndarray:
     return pd.to_numeric(col, errors="coerce").to_numpy(dtype=float)
 
 
+def concurrent_jobs(starts: np.ndarray, ends: np.ndarray) -> int:
+    """The largest number of the intervals ``[starts[k], ends[k])`` that overlap at one instant."""
+    keep = np.isfinite(starts) & np.isfinite(ends)
+    # an end sorts before a start at the same instant: back-to-back jobs do not overlap
+    events = sorted([(t, 1) for t in starts[keep]] + [(t, -1) for t in ends[keep]], key=lambda e: (e[0], e[1]))
+    running = peak = 0
+    for _, step in events:
+        running += step
+        peak = max(peak, running)
+    return peak
+
+
 def _machine(df: pd.DataFrame) -> dict[str, Any]:
-    """Load average at the measurements, wall-clock span of the jobs, their summed time, status counts."""
+    """Load average at the measurements, wall-clock span of the jobs, their summed time, how many
+    ran at once, status counts."""
     load = df[df["status"] != "skipped"]["load1"].to_numpy(dtype=float)
     load = load[np.isfinite(load)]
-    ends = (df["job_started"] + df["job_wall_s"]).to_numpy(dtype=float)
+    jobs = df.drop_duplicates(["N", "config"])
+    starts = jobs["job_started"].to_numpy(dtype=float)
+    ends = starts + jobs["job_wall_s"].to_numpy(dtype=float)
     return {
         "load": {"min": float(np.min(load)), "median": float(np.median(load)), "max": float(np.max(load))}
         if load.size
         else {},
         "protocol": _protocol(df),
-        "span_s": float(np.nanmax(ends) - np.nanmin(df["job_started"])) if len(df) else math.nan,
-        "job_time_s": float(df.drop_duplicates(["N", "config"])["job_wall_s"].sum()),
+        "span_s": float(np.nanmax(ends) - np.nanmin(starts)) if len(df) else math.nan,
+        "job_time_s": float(jobs["job_wall_s"].sum()),
+        "concurrent_jobs": concurrent_jobs(starts, ends),
         "counts": df["status"].value_counts().to_dict(),
     }
 
@@ -417,8 +433,9 @@ def findings(
       1's digits, from the same (cascade) warm start and cold against cold.
     - ``protocol``: what the timing protocol did (``_protocol``); ratios and rankings use
       ``rank_key`` (reference units when measured).
-    - ``load``/``span_s``/``job_time_s``/``counts``: the load average at the measurements, the
-      wall-clock span of the measurement jobs, their summed run time and the status counts.
+    - ``load``/``span_s``/``job_time_s``/``concurrent_jobs``/``counts``: the load average at the
+      measurements, the wall-clock span of the measurement jobs, their summed run time, the most
+      of them that ran at once, and the status counts.
     """
     Ns = sorted(int(N) for N in df["N"].unique())
     t1 = [n for n in table1_norms if f"total_{n}" in df.columns]

@@ -65,7 +65,7 @@ PROTOCOL_OLD = (
 )
 SPAN = (
     "- The measurement jobs spanned {span:.1f} min of wall-clock time "
-    "(sum of their run times {job:.1f} min, 2 jobs in parallel)."
+    "(sum of their run times {job:.1f} min, at most {concurrent} at once)."
 )
 EOC_VERDICT_CLOSE = (
     "A fixed loose QP tolerance moves the EOCs towards the published irregular ones; the pattern is "
@@ -107,7 +107,9 @@ def _setup(df, found: Mapping, source: str, protocol: Protocol) -> list[str]:
     protocol, timing = found.get("protocol", {}), protocol
     lines.append(PROTOCOL.format(**protocol, **_protocol_settings(timing)) if "runs" in protocol else PROTOCOL_OLD)
     if math.isfinite(found.get("span_s", math.nan)):
-        lines.append(SPAN.format(span=found["span_s"] / 60, job=found["job_time_s"] / 60))
+        concurrent = found.get("concurrent_jobs", 0)
+        at_once = "one job" if concurrent == 1 else f"{concurrent} jobs"
+        lines.append(SPAN.format(span=found["span_s"] / 60, job=found["job_time_s"] / 60, concurrent=at_once))
     return lines
 
 
