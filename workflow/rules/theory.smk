@@ -6,6 +6,7 @@
 rule theory_quantities:
     """Supercloseness, discrete H^{1/2}(boundary) norm and contact set of one solution."""
     input:
+        system=rules.discretise.output.npz,
         solution=rules.solve.output.npz,
         code=code("theory_quantities"),
     output:

@@ -7,4 +7,5 @@ from signorini.studies.theory.quantities import quantities_stage
 snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake):
-    quantities_stage(SceneMesh.of_job(snakemake), snakemake.input.solution, snakemake.output.json)
+    i = snakemake.input
+    quantities_stage(SceneMesh.of_job(snakemake), i.system, i.solution, snakemake.output.json)

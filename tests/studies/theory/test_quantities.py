@@ -19,7 +19,9 @@ from signorini.studies.theory.quantities import (
     h1_norm_p1,
     ritz_projection,
     ritz_rhs,
+    ritz_solve,
     supercloseness,
+    theory_quantities,
 )
 
 
@@ -72,6 +74,36 @@ def test_ritz_projection_is_unchanged_by_chunking(diagonal):
         np.testing.assert_allclose(r, reference, rtol=0, atol=1e-13 * np.abs(reference).max())
     u_h = problem.u(mesh.p)
     assert supercloseness(problem, mesh, u_h, chunk=37) == pytest.approx(supercloseness(problem, mesh, u_h), rel=1e-12)
+
+
+def test_ritz_solve_agrees_with_the_direct_factorisation_and_says_how():
+    """CG with the AMG V-cycle gives the factorisation's R_h u (several levels at N = 64) from any
+    start; started from u_h it needs fewer iterations, and ``info`` records them."""
+    problem = Problem(x0=0.47, c=2.5)
+    disc = build(problem, 64)
+    rhs = ritz_rhs(problem, disc.mesh)
+    direct = factorize(disc.A)(rhs)
+    cold, warm = {}, {}
+    from_zero = ritz_solve(disc.A, rhs, info=cold)
+    u_h = solve_discrete(disc).u
+    from_u_h = ritz_solve(disc.A, rhs, start=u_h, info=warm)
+    for r in (from_zero, from_u_h):
+        np.testing.assert_allclose(r, direct, rtol=0, atol=1e-12 * np.abs(direct).max())
+    assert cold["levels"] > 1 and cold["energy_residual"] <= cold["tol"]
+    assert 0 < warm["iterations"] < cold["iterations"]
+    assert set(cold) >= {"method", "iterations", "energy_residual", "setup_s", "cg_s", "operator_complexity"}
+
+
+def test_theory_quantities_use_the_discrete_problems_matrix():
+    """With the discretise archive's A (K + c M, here c = 2.5: the H¹ norm assembles K + M apart)
+    the supercloseness is the one of the assembled matrix, and the solve is recorded."""
+    problem = Problem(x0=0.47, c=2.5)
+    disc = build(problem, 32)
+    u_h = solve_discrete(disc).u
+    given = theory_quantities(problem, disc.mesh, u_h, disc.A)
+    assembled = theory_quantities(problem, disc.mesh, u_h)
+    assert given["supercloseness_H1"] == pytest.approx(assembled["supercloseness_H1"], rel=1e-9)
+    assert given["ritz"]["iterations"] > 0
 
 
 def test_h1_norm_of_p1_function_is_exact():

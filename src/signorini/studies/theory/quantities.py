@@ -3,9 +3,11 @@
 
 - ``ritz_projection``: ``R_h u ∈ V_h`` with ``(R_h u, w_h)_{H¹} = (u, w_h)_{H¹}`` for all
   ``w_h`` (Definition 3.1, with the problem's reaction coefficient: ``∫ ∇R_h u·∇w + c R_h u w
-  = ∫ ∇u·∇w + c u w``), assembled from the exact ``u`` and ``∇u`` by quadrature, over chunks of
-  triangles (bounded memory at N = 2001).  It is not
-  the unconstrained problem with ``f``: ``u`` carries the boundary flux ``∂_n u``.
+  = ∫ ∇u·∇w + c u w``), its right-hand side from the exact ``u`` and ``∇u`` by quadrature over
+  chunks of triangles, its system ``(K + c M) r = ...`` solved by conjugate gradients with the
+  multigrid route's algebraic multigrid V-cycle (``ritz_solve``): time and memory in O(n), where
+  a sparse factorisation needs 5 GiB at N = 2001 and more than this machine at N = 4001.  It is
+  not the unconstrained problem with ``f``: ``u`` carries the boundary flux ``∂_n u``.
 - ``supercloseness``: ``‖R_h u - u_h‖_{H¹}``, Theorem 3.6 predicts ``O(h^{3/2-ε})``.
 - ``boundary_h12_norm``: the discrete interpolation norm ``vᵀ M (M⁻¹(K + M))^{1/2} v`` of
   ``H^{1/2}(∂Ω) = [L²(∂Ω), H¹(∂Ω)]_{1/2}`` for the error interpolated on a refined
@@ -25,44 +27,108 @@ from typing import TYPE_CHECKING
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-from skfem import LinearForm, MeshTri
+from skfem import MeshTri
 
-from signorini.fem.assembly import CHUNK_ELEMENTS, assemble_linear_form, system_matrix
+# the assembly's own affine maps and P1 shape functions: the right-hand side below uses the
+# operations of the load vector, with ∇u·∇φ + c u φ in place of f φ
+from signorini.fem.assembly import (
+    CHUNK_ELEMENTS,
+    INTORDER,
+    _affine_maps,
+    _mesh_and_quadrature,
+    _p1_values,
+    _quadrature_measure,
+    system_matrix,
+)
 from signorini.fem.problem import Problem
-from signorini.solvers.linalg import factorize
 
 if TYPE_CHECKING:
     from signorini.studies.scene.store import SceneMesh
 
 log = logging.getLogger(__name__)
 
+RITZ_TOL = 1e-14  # energy-relative accuracy of R_h u: the multigrid route's final accuracy
+RITZ_MAX_ITER = 500
+# the gradients of the P1 shape functions on the reference triangle, (shape function, coordinate)
+_REFERENCE_GRADIENTS = np.array([[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]])
+
 
 def ritz_rhs(problem: Problem, mesh: MeshTri, chunk: int = CHUNK_ELEMENTS) -> np.ndarray:
     """``(∫ ∇u·∇φ_i + c u φ_i)_i`` from the exact ``u`` and ``∇u``, the right-hand side of ``R_h u``.
 
-    The package's 16-point degree-8 rule on every triangle, assembled over chunks of at
-    most ``chunk`` triangles (``assemble_linear_form``): bounded memory at N = 2001.
+    The package's 16-point degree-8 rule on every triangle, over chunks of at most ``chunk``
+    triangles (bounded memory at N = 4001); ``u`` and ``∇u`` are evaluated once per quadrature
+    point, and the P1 gradients, constant on a triangle, once per triangle.
     """
+    if isinstance(chunk, bool) or int(chunk) < 1:
+        raise ValueError(f"chunk={chunk!r} must be a positive number of triangles")
+    _, (X, W) = _mesh_and_quadrature(mesh, INTORDER)
+    values = np.stack(_p1_values(X))  # (shape function, q)
+    n, n_el = mesh.p.shape[1], mesh.t.shape[1]
+    b = np.zeros(n)
+    for start in range(0, n_el, int(chunk)):
+        t = mesh.t[:, start : min(n_el, start + int(chunk))]
+        A, shift, det, inv = _affine_maps(mesh.p, t)
+        x = (np.einsum("ijk,jl", A, X).T + shift.T).T  # (2, E, q): the quadrature points
+        dx = _quadrature_measure(det, W)  # (E, q)
+        gu = problem.grad_u(x)
+        flux = np.stack([np.sum(gu[d] * dx, axis=1) for d in range(2)])  # ∫_T ∇u, (2, E)
+        mass = (problem.u(x) * dx) @ values.T  # ∫_T u φ_k, (E, 3)
+        for k in range(3):
+            grad_phi = np.einsum("ije,i->je", inv, _REFERENCE_GRADIENTS[k])  # J⁻ᵀ ∇̂φ_k, (2, E)
+            b += np.bincount(t[k], flux[0] * grad_phi[0] + flux[1] * grad_phi[1] + problem.c * mass[:, k], minlength=n)
+        del x, dx, gu, flux, mass
+    return b
 
-    @LinearForm
-    def rhs(v, w):
-        gu = problem.grad_u(w.x)
-        return gu[0] * v.grad[0] + gu[1] * v.grad[1] + problem.c * problem.u(w.x) * v
 
-    return assemble_linear_form(mesh, rhs, chunk)
+def ritz_solve(
+    A: sp.spmatrix, rhs: np.ndarray, start: np.ndarray | None = None, info: dict | None = None
+) -> np.ndarray:
+    """``x`` with ``A x = rhs`` (``A`` symmetric positive definite) by conjugate gradients
+    preconditioned with one classical algebraic multigrid V-cycle (the multigrid route's
+    ``hierarchy`` and ``pcg``), from ``start`` (zero if None) to the energy-relative accuracy
+    ``RITZ_TOL``.  ``info``, when given, receives the iterations, the final energy residual and
+    the seconds of the set-up and of the iteration.  Raises ``NotConvergedError`` when CG does
+    not reach ``RITZ_TOL`` within ``RITZ_MAX_ITER`` iterations."""
+    from signorini.solvers.multigrid import hierarchy, pcg
+
+    A = sp.csr_matrix(A)
+    t0 = time.perf_counter()
+    amg = hierarchy(A)
+    vcycle = amg.aspreconditioner(cycle="V")
+    t1 = time.perf_counter()
+    x0 = np.zeros_like(rhs) if start is None else np.asarray(start, dtype=float)
+    x, iterations, ratio = pcg(A, rhs, x0, vcycle.matvec, RITZ_TOL, RITZ_MAX_ITER)
+    if info is not None:
+        info.update(
+            method="CG, classical AMG V-cycle",
+            levels=len(amg.levels),
+            operator_complexity=float(amg.operator_complexity()),
+            tol=RITZ_TOL,
+            iterations=iterations,
+            energy_residual=float(ratio),
+            setup_s=t1 - t0,
+            cg_s=time.perf_counter() - t1,
+        )
+    return x
 
 
 def ritz_projection(
-    problem: Problem, mesh: MeshTri, A: sp.spmatrix | None = None, chunk: int = CHUNK_ELEMENTS
+    problem: Problem,
+    mesh: MeshTri,
+    A: sp.spmatrix | None = None,
+    chunk: int = CHUNK_ELEMENTS,
+    start: np.ndarray | None = None,
+    info: dict | None = None,
 ) -> np.ndarray:
-    """Nodal values of ``R_h u``: solve ``A r = (∫ ∇u·∇φ_i + c u φ_i)_i`` with ``A = K + c M``.
+    """Nodal values of ``R_h u``: ``A r = (∫ ∇u·∇φ_i + c u φ_i)_i`` with ``A = K + c M`` solved by
+    ``ritz_solve`` from ``start`` (``info`` receives how).
 
     ``A`` is assembled (over chunks of ``chunk`` triangles) unless given; the right-hand
     side is ``ritz_rhs``.
     """
     A = system_matrix(mesh, problem.c, chunk=chunk) if A is None else A
-    rhs = ritz_rhs(problem, mesh, chunk)  # before the factorisation: the two peaks do not add up
-    return factorize(A)(rhs)
+    return ritz_solve(A, ritz_rhs(problem, mesh, chunk), start, info)
 
 
 def h1_norm_p1(mesh: MeshTri, v: np.ndarray, A1: sp.spmatrix | None = None, chunk: int = CHUNK_ELEMENTS) -> float:
@@ -71,14 +137,24 @@ def h1_norm_p1(mesh: MeshTri, v: np.ndarray, A1: sp.spmatrix | None = None, chun
     return float(np.sqrt(max(v @ (A1 @ v), 0.0)))
 
 
-def supercloseness(problem: Problem, mesh: MeshTri, u_h: np.ndarray, chunk: int = CHUNK_ELEMENTS) -> float:
-    """‖R_h u - u_h‖_{H¹} (Theorem 3.6: O(h^{3/2-ε})); K + c M is assembled once and reused when c = 1.
+def supercloseness(
+    problem: Problem,
+    mesh: MeshTri,
+    u_h: np.ndarray,
+    chunk: int = CHUNK_ELEMENTS,
+    A: sp.spmatrix | None = None,
+    info: dict | None = None,
+) -> float:
+    """‖R_h u - u_h‖_{H¹} (Theorem 3.6: O(h^{3/2-ε})); ``A = K + c M`` (the discrete problem's
+    matrix) assembled unless given, and reused for the H¹ norm when c = 1.  ``R_h u`` is computed
+    from ``u_h`` (the two differ by O(h^{3/2})), ``info`` receives how (``ritz_solve``).
 
     Every assembly runs over chunks of at most ``chunk`` triangles (bounded memory).
     """
-    A = system_matrix(mesh, problem.c, chunk=chunk)
+    A = system_matrix(mesh, problem.c, chunk=chunk) if A is None else A
     A1 = A if problem.c == 1.0 else None
-    return h1_norm_p1(mesh, ritz_projection(problem, mesh, A, chunk) - u_h, A1, chunk)
+    r = ritz_projection(problem, mesh, A, chunk, start=u_h, info=info)
+    return h1_norm_p1(mesh, r - u_h, A1, chunk)
 
 
 def _boundary_loop(mesh: MeshTri) -> np.ndarray:
@@ -194,24 +270,33 @@ def contact_set(problem: Problem, mesh: MeshTri, u_h: np.ndarray, samples_per_un
     }
 
 
-def theory_quantities(problem: Problem, mesh: MeshTri, u_h: np.ndarray) -> dict:
-    """Supercloseness, the discrete H^{1/2}(∂Ω) norm of the error and the contact-set metrics."""
+def theory_quantities(problem: Problem, mesh: MeshTri, u_h: np.ndarray, A: sp.spmatrix | None = None) -> dict:
+    """Supercloseness, the discrete H^{1/2}(∂Ω) norm of the error and the contact-set metrics;
+    ``A = K + c M`` of the discrete problem if at hand (else assembled), and under ``ritz`` how
+    ``R_h u`` was solved (``ritz_solve``)."""
+    ritz: dict = {}
     return {
-        "supercloseness_H1": supercloseness(problem, mesh, u_h),
+        "supercloseness_H1": supercloseness(problem, mesh, u_h, A=A, info=ritz),
         "H12_discrete": boundary_h12_norm(problem, mesh, u_h),
         "contact": contact_set(problem, mesh, u_h),
+        "ritz": ritz,
     }
 
 
-def quantities_stage(at: SceneMesh, solution_npz: str | os.PathLike, out_json: str | os.PathLike) -> dict:
+def quantities_stage(
+    at: SceneMesh, system_npz: str | os.PathLike, solution_npz: str | os.PathLike, out_json: str | os.PathLike
+) -> dict:
     """Stage ``theory_quantities``: supercloseness, discrete H^{1/2}(∂Ω) norm and contact-set
-    metrics of one solution."""
+    metrics of one solution; the matrix ``A = K + c M`` is the one of the mesh's ``discretise``
+    archive."""
     from signorini.pipeline.artifacts import save_json
+    from signorini.studies.scene.store import load_system
 
     u_h = at.load_solution(solution_npz)
+    A, _, _ = load_system(system_npz, at.N)
     t0 = time.perf_counter()
-    values = theory_quantities(at.problem, at.mesh(), u_h)
+    values = theory_quantities(at.problem, at.mesh(), u_h, A)
     info = {"N": at.N, "h": at.h, **values, "timings": {"theory_s": time.perf_counter() - t0}}
-    log.info("N=%d %s", at.N, {k: v for k, v in values.items() if k != "contact"})
+    log.info("N=%d %s", at.N, {k: v for k, v in values.items() if k not in ("contact", "ritz")})
     save_json(out_json, info)
     return info
