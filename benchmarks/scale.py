@@ -70,7 +70,7 @@ def run_stage(stage: str, N: int, workdir: Path) -> None:
     elif stage in TRUE_NORMS:
         norms_stage(at, solution, {stage: d / f"{stage}.json"}, conventions)
     elif stage == "theory_quantities":
-        quantities_stage(at, solution, d / "theory.json")
+        quantities_stage(at, d / "system.npz", solution, d / "theory.json")
     else:
         raise ValueError(f"unknown stage {stage}")
     seconds = time.perf_counter() - t0
