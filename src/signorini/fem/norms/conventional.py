@@ -29,6 +29,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from signorini.fem.boundary import boundary_rule
+from signorini.fem.derivatives import u_and_grad_u
 from signorini.fem.norms.conventions import Conventions
 from signorini.fem.norms.names import UnknownNormError, parse_norm_name
 from signorini.fem.problem import Problem
@@ -132,8 +133,9 @@ def boundary_error(
     length = np.linalg.norm(pb - pa, axis=0)
     xb = rule.points(mesh.p)
     uhb = u_h[a][:, None] * (1.0 - rule.s) + u_h[b][:, None] * rule.s
-    eb = problem.u(xb) - uhb
-    dteb = np.einsum("ie,iek->ek", (pb - pa) / length, problem.grad_u(xb)) - ((u_h[b] - u_h[a]) / length)[:, None]
+    ub, dub = u_and_grad_u(problem, xb)
+    eb = ub - uhb
+    dteb = np.einsum("ie,iek->ek", (pb - pa) / length, dub) - ((u_h[b] - u_h[a]) / length)[:, None]
     return eb, dteb, rule.ds
 
 
@@ -179,7 +181,8 @@ def error_field(
             X, W, role = _reference_rule(conv.quadrature)
             tq = t if role is None else _rolled_t(mesh.p, t, role)
             x, uh, duh, det = p1_at_points(mesh.p, tq, u_h, X)
-            cache["quadrature"] = (problem.u(x) - uh, problem.grad_u(x) - duh)
+            u, du = u_and_grad_u(problem, x)
+            cache["quadrature"] = (u - uh, du - duh)
             cache["dx"] = det[:, None] * W[None, :]
         return (*cache["quadrature"], cache["dx"])
 
@@ -188,7 +191,8 @@ def error_field(
             return at_quadrature()[:2]
         if which not in cache:
             x, uh, duh, _ = p1_at_points(mesh.p, t, u_h, _element_points(mesh, which))
-            pe, pde = problem.u(x) - uh, problem.grad_u(x) - duh
+            u, du = u_and_grad_u(problem, x)
+            pe, pde = u - uh, du - duh
             if which == "all":
                 e, de, _ = at_quadrature()
                 pe, pde = np.concatenate([pe, e], axis=-1), np.concatenate([pde, de], axis=-1)
@@ -211,20 +215,42 @@ def error_field(
 # --- the norms ---------------------------------------------------------------------
 
 
+def _scale_of(top: float) -> float:
+    """The power of two ``power_scale`` gives for ``max |values| = top``."""
+    return float(2.0 ** np.floor(np.log2(top))) if 0.0 < top < np.inf else 1.0
+
+
 def power_scale(values: np.ndarray) -> float:
     """A power of two near ``max |values|`` (1 when they vanish): dividing by it is exact, and
     ``|x / scale|^p`` neither overflows nor underflows where ``|x|^p`` would (``A = 10^±12`` and
     ``p = 32``, or any ``p`` at ``A = 10^100``)."""
-    top = float(np.max(np.abs(values), initial=0.0))
-    return float(2.0 ** np.floor(np.log2(top))) if 0.0 < top < np.inf else 1.0
+    return _scale_of(float(np.max(np.abs(values), initial=0.0)))
+
+
+def integer_power(base: np.ndarray, q: float) -> np.ndarray:
+    """``base^q`` for ``base ≥ 0``: by repeated squaring when ``q`` is a positive integer (a few
+    products where ``pow`` costs tens of them: ``q = 32`` is five squarings, each adding a rounding),
+    else by ``pow``."""
+    if not float(q).is_integer() or q < 1:
+        return base**q
+    k, result = int(q), None
+    while k:
+        if k & 1:
+            result = base if result is None else result * base
+        k >>= 1
+        if k:
+            base = base * base
+    return result
 
 
 def scaled_p_sum(parts: list[np.ndarray], p: float, weights: np.ndarray | float = 1.0) -> float:
     """(Σ weights · Σ_parts |x|^p)^{1/p}, computed as ``s · (Σ weights · Σ |x/s|^p)^{1/p}`` with the
-    power of two ``s = power_scale``: the same value as the plain formula where that is finite
-    and non-zero (correctly rounded powers commute with exact scaling), the right one elsewhere."""
-    scale = max((power_scale(x) for x in parts), default=1.0)
-    total = sum(np.abs(x / scale) ** p for x in parts)
+    power of two ``s = power_scale``: the value of the plain formula where that is finite and
+    non-zero (to the few roundings of ``integer_power`` for an integer ``p``; exactly for any other
+    ``p``, since correctly rounded powers commute with exact scaling), the right one elsewhere."""
+    magnitudes = [np.abs(x) for x in parts]
+    scale = _scale_of(max((float(np.max(a, initial=0.0)) for a in magnitudes), default=0.0))
+    total = sum(integer_power(a / scale, p) for a in magnitudes)
     return float(np.sum(total * weights) ** (1.0 / p) * scale)
 
 

@@ -60,6 +60,7 @@ from signorini.fem.norms.conventional import (
     boundary_l2_norm,
     evaluate_norms,
     h12_interpolation_norm,
+    integer_power,
     power_scale,
 )
 from signorini.fem.norms.conventions import Conventions
@@ -157,21 +158,6 @@ def _error_scale(problem, mesh: MeshTri, u_h: np.ndarray, gradient: bool) -> flo
     return max(scales, default=1.0)
 
 
-def _power(square: np.ndarray, q: float) -> np.ndarray:
-    """``square^q`` (square ≥ 0, so ``|x|^p = _power(x², p/2)``); by repeated squaring for an integer q
-    (a few products instead of ``pow``, the same value up to a few roundings)."""
-    if not float(q).is_integer() or q < 1:
-        return square**q
-    k, result = int(q), None
-    while k:
-        if k & 1:
-            result = square if result is None else result * square
-        k >>= 1
-        if k:
-            square = square * square
-    return result
-
-
 def _integrand(spec, form: str):
     """``(e, ∇e) ↦`` the integrand whose integral is the norm to the power p; needs ∇e?"""
     q = spec.p / 2.0
@@ -179,12 +165,14 @@ def _integrand(spec, form: str):
         return (lambda e, de: e * e + de[0] * de[0] + de[1] * de[1]), True
     if spec.family == "L":
         g = {"": lambda e: e, "plus": lambda e: np.maximum(e, 0.0), "minus": lambda e: np.maximum(-e, 0.0)}[spec.part]
-        return (lambda e, de: _power(g(e) ** 2, q)), False
+        return (lambda e, de: integer_power(g(e) ** 2, q)), False
     if form == "components":
-        return (lambda e, de: _power(e * e, q) + _power(de[0] * de[0], q) + _power(de[1] * de[1], q)), True
+        return (
+            lambda e, de: integer_power(e * e, q) + integer_power(de[0] * de[0], q) + integer_power(de[1] * de[1], q)
+        ), True
     if form == "gradient":
-        return (lambda e, de: _power(e * e, q) + _power(de[0] * de[0] + de[1] * de[1], q)), True
-    return (lambda e, de: _power(de[0] * de[0] + de[1] * de[1], q)), True
+        return (lambda e, de: integer_power(e * e, q) + integer_power(de[0] * de[0] + de[1] * de[1], q)), True
+    return (lambda e, de: integer_power(de[0] * de[0] + de[1] * de[1], q)), True
 
 
 def _complete_homogeneous(a: np.ndarray, p: int) -> np.ndarray:
