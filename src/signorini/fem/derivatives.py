@@ -79,9 +79,12 @@ def derivative_bounds(problem):
 
 def u_and_grad_u(problem, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(u(x), ∇u(x))``; for the manufactured ``Problem`` with one evaluation of its polar quantities,
-    bit for bit ``problem.u(x)`` and ``problem.grad_u(x)`` (the same operations)."""
+    bit for bit ``problem.u(x)`` and ``problem.grad_u(x)`` (the same operations; for ``A = 0`` zeros
+    without evaluating them, where those give zeros of either sign)."""
     if not isinstance(problem, Problem):
         return problem.u(x), problem.grad_u(x)
+    if problem.A == 0.0:  # u ≡ 0 (the norms of a P1 function, e.g. an algebraic error): nothing to evaluate
+        return np.zeros(np.shape(x)[1:]), np.zeros(np.shape(x))
     inside, dx, dy, r, re, im, ut = problem._local(x)
     value, grad = np.zeros(np.shape(x)[1:]), np.zeros(np.shape(x))
     psi, dpr = problem.psi(r), problem.dpsi_over_r(r)
