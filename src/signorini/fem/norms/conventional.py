@@ -140,7 +140,8 @@ def boundary_error(
 
 
 def _parts_needed(names: list[str] | None) -> set[str]:
-    """Which evaluations the named norms need: quadrature, linf, w1inf, boundary."""
+    """Which evaluations the named norms need: quadrature (``e`` and ``∇e`` at the triangle rule),
+    values (``e`` alone there: the ``Lp`` norms), linf, w1inf, boundary."""
     if names is None:
         return {"quadrature", "linf", "w1inf", "boundary"}
     parts = set()
@@ -151,7 +152,7 @@ def _parts_needed(names: list[str] | None) -> set[str]:
         elif spec.is_max:
             parts.add("w1inf" if spec.family == "W1" else "linf")
         else:
-            parts.add("quadrature")
+            parts.add("values" if spec.family == "L" else "quadrature")
     return parts
 
 
@@ -166,46 +167,54 @@ def error_field(
     """Evaluate ``e = u - u_h`` and ``∇e`` where the norms need them.
 
     With ``norms`` given, only the evaluations those norms need are made (the
-    others are left ``None``), so one norm can be computed on its own cheaply.
-    ``elements`` restricts the cell evaluations to a subset of triangles (the
-    boundary part always covers all of ∂Ω); ``evaluate_norms`` uses it to bound memory.
+    others are left ``None``; ``∇e`` only for a norm that has it), so one norm can be
+    computed on its own cheaply.  ``elements`` restricts the cell evaluations to a subset of
+    triangles (the boundary part always covers all of ∂Ω); ``evaluate_norms`` uses it to bound
+    memory.
     """
     conv = conventions or Conventions()
     parts = _parts_needed(norms)
-    cache: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    cache: dict[str, tuple] = {}
 
     t = mesh.t if elements is None else mesh.t[:, elements]
 
-    def at_quadrature() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        if "quadrature" not in cache:
+    def error_at(x: np.ndarray, uh: np.ndarray, duh: np.ndarray, gradient: bool) -> tuple:
+        if not gradient:  # problem.u: the same operations as u_and_grad_u's value
+            return problem.u(x) - uh, None
+        u, du = u_and_grad_u(problem, x)
+        return u - uh, du - duh
+
+    def at_quadrature(gradient: bool) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+        key = "quadrature" if gradient or "quadrature" in cache else "values"
+        if key not in cache:
             X, W, role = _reference_rule(conv.quadrature)
             tq = t if role is None else _rolled_t(mesh.p, t, role)
             x, uh, duh, det = p1_at_points(mesh.p, tq, u_h, X)
-            u, du = u_and_grad_u(problem, x)
-            cache["quadrature"] = (u - uh, du - duh)
+            cache[key] = error_at(x, uh, duh, gradient)
             cache["dx"] = det[:, None] * W[None, :]
-        return (*cache["quadrature"], cache["dx"])
+        return (*cache[key], cache["dx"])
 
-    def at_points(which: str) -> tuple[np.ndarray, np.ndarray]:
+    def at_points(which: str, gradient: bool) -> tuple[np.ndarray, np.ndarray | None]:
         if which == "quadrature":
-            return at_quadrature()[:2]
-        if which not in cache:
+            return at_quadrature(gradient)[:2]
+        key = which if gradient or which in cache else f"{which} values"
+        if key not in cache:
             x, uh, duh, _ = p1_at_points(mesh.p, t, u_h, _element_points(mesh, which))
-            u, du = u_and_grad_u(problem, x)
-            pe, pde = u - uh, du - duh
+            pe, pde = error_at(x, uh, duh, gradient)
             if which == "all":
-                e, de, _ = at_quadrature()
-                pe, pde = np.concatenate([pe, e], axis=-1), np.concatenate([pde, de], axis=-1)
-            cache[which] = (pe, pde)
-        return cache[which]
+                e, de, _ = at_quadrature(gradient)
+                pe = np.concatenate([pe, e], axis=-1)
+                pde = None if pde is None else np.concatenate([pde, de], axis=-1)
+            cache[key] = (pe, pde)
+        return cache[key]
 
     e = de = dx = e_max = de_max = e_w1 = eb = dteb = dsb = None
-    if "quadrature" in parts:
-        e, de, dx = at_quadrature()
+    if parts & {"quadrature", "values"}:
+        e, de, dx = at_quadrature("quadrature" in parts)
     if "linf" in parts:
-        e_max = at_points(conv.linf_points)[0]
+        e_max = at_points(conv.linf_points, False)[0]
     if "w1inf" in parts:
-        e_w1, de_max = at_points(conv.w1inf_points)
+        e_w1, de_max = at_points(conv.w1inf_points, True)
     if "boundary" in parts:
         # Gauss–Legendre on every piece of every boundary edge, split (and graded) where u is not smooth
         eb, dteb, dsb = boundary_error(problem, mesh, u_h, BOUNDARY_POINTS)
