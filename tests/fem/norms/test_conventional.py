@@ -437,3 +437,26 @@ def test_every_norm_scales_with_the_amplitude(amplitude):
         values[A] = evaluate_norms(disc.problem, disc.mesh, solve_discrete(disc).u, names, chunk=200)
     for name in names:
         assert values[amplitude][name] / amplitude == pytest.approx(values[1.0][name], rel=1e-12), name
+
+
+def test_shared_powers_give_each_norm_its_own_value_bit_for_bit():
+    """The Lp and W1p norms of one field reduce shared squarings (``PowerCache``): each value is
+    ``scaled_p_sum`` of its arrays alone, in any order of the norms, and only one group of arrays
+    is held at a time."""
+    from signorini.fem.discrete import build
+    from signorini.fem.norms.conventional import error_field, field_p_sum, scaled_p_sum
+    from signorini.fem.problem import Problem
+    from signorini.fem.solve import solve_discrete
+
+    disc = build(Problem(x0=0.47, c=2.0), 21, "sw_ne")
+    u_h = solve_discrete(disc).u
+    names = {"e": None, "e+": None, "d1": None, "d2": None, "grad": None}
+    groups = [("e",), ("e", "d1", "d2"), ("e+",), ("e", "grad"), ("e",)]
+    for order in (groups, groups[::-1]):
+        f = error_field(disc.problem, disc.mesh, u_h)
+        for group in order:
+            for p in (2.0, 32.0, 3.0, 2.5, 16.0, 6.0):
+                arrays = [f.part(name) for name in group]
+                assert field_p_sum(f, group, p) == scaled_p_sum(arrays, p, f.dx), (group, p)
+            held = {key[1] for key in f.powers.store}
+            assert held <= set(group) and set(names) >= held

@@ -23,7 +23,7 @@ norms evaluated to a stated accuracy, with an error estimate, are the ``<name>_t
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -60,6 +60,60 @@ class ErrorField:
     dteb: np.ndarray  # tangential derivative ∂_t e at boundary Gauss points
     dsb: np.ndarray  # boundary weights
     conventions: Conventions
+    powers: PowerCache = field(default_factory=lambda: PowerCache(), repr=False, compare=False)
+
+    def part(self, name: str) -> np.ndarray:
+        """The array at the quadrature points a norm reduces: ``e``, ``e+`` = max(e, 0), ``e-`` =
+        max(-e, 0), ``d1``, ``d2`` (the partial derivatives) or ``grad`` = |∇e|."""
+        e, de = self.e, self.de
+        return {
+            "e": lambda: e,
+            "e+": lambda: np.maximum(e, 0.0),
+            "e-": lambda: np.maximum(-e, 0.0),
+            "d1": lambda: de[0],
+            "d2": lambda: de[1],
+            "grad": lambda: np.hypot(de[0], de[1]),
+        }[name]()
+
+
+class PowerCache:
+    """The magnitudes ``|x|`` of one error field's arrays and the squarings ``|x / s|^(2^j)`` of
+    ``integer_power``, kept while the norms being evaluated share them: ``L2`` … ``L32`` reduce the
+    squarings of one chain, and so do ``W12`` … ``W132``.  Only one group of arrays (with its scale)
+    is kept at a time, so at most one chain's arrays are held; each power is the product
+    ``integer_power`` forms, bit for bit."""
+
+    def __init__(self) -> None:
+        self.group: tuple = ()
+        self.store: dict = {}
+
+    def enter(self, names: tuple[str, ...], scale: float) -> None:
+        """Keep the arrays of the group ``names`` reduced at ``scale``: another group's go."""
+        if self.group != (names, scale):
+            self.group = (names, scale)
+            self.store = {key: v for key, v in self.store.items() if key[0] == "abs" and key[1] in names}
+
+    def magnitude(self, f: ErrorField, name: str) -> tuple[np.ndarray, float]:
+        """``|x|`` and its maximum."""
+        if ("abs", name) not in self.store:
+            a = np.abs(f.part(name))
+            self.store["abs", name] = (a, float(np.max(a, initial=0.0)))
+        return self.store["abs", name]
+
+    def power(self, f: ErrorField, name: str, scale: float, p: float) -> np.ndarray:
+        """``|x / scale|^p`` (``integer_power``'s value), the squarings kept for the next p."""
+        a = self.magnitude(f, name)[0]
+        if not float(p).is_integer() or p < 1:
+            return (a / scale) ** p
+        k, j, result = int(p), 0, None
+        while k:
+            if ("sq", name, j) not in self.store:
+                self.store["sq", name, j] = a / scale if j == 0 else self.store["sq", name, j - 1] ** 2
+            if k & 1:
+                base = self.store["sq", name, j]
+                result = base if result is None else result * base
+            k, j = k >> 1, j + 1
+        return result
 
 
 def _reference_rule(quadrature: str) -> tuple[np.ndarray, np.ndarray, int | None]:
@@ -263,10 +317,19 @@ def scaled_p_sum(parts: list[np.ndarray], p: float, weights: np.ndarray | float 
     return float(np.sum(total * weights) ** (1.0 / p) * scale)
 
 
+def field_p_sum(f: ErrorField, names: tuple[str, ...], p: float) -> float:
+    """``scaled_p_sum`` of the field's arrays ``names`` (``ErrorField.part``) with the weights ``dx``,
+    to the same bits, their magnitudes and squarings shared with the field's other norms
+    (``PowerCache``)."""
+    scale = _scale_of(max(f.powers.magnitude(f, name)[1] for name in names))
+    f.powers.enter(names, scale)
+    total = sum(f.powers.power(f, name, scale, p) for name in names)
+    return float(np.sum(total * f.dx) ** (1.0 / p) * scale)
+
+
 def lp_norm(f: ErrorField, p: float, part: str = "") -> float:
     """(∫ |g|^p)^{1/p} with g = e, e⁺ = max(e, 0) (part "plus") or e⁻ = max(-e, 0) ("minus")."""
-    g = {"": np.abs(f.e), "plus": np.maximum(f.e, 0.0), "minus": np.maximum(-f.e, 0.0)}[part]
-    return scaled_p_sum([g], p, f.dx)
+    return field_p_sum(f, ({"": "e", "plus": "e+", "minus": "e-"}[part],), p)
 
 
 def linf_norm(f: ErrorField, part: str = "") -> float:
@@ -277,14 +340,8 @@ def linf_norm(f: ErrorField, part: str = "") -> float:
 
 def w1p_norm(f: ErrorField, p: float) -> float:
     """W^{1,p}: components (‖e‖ᵖ + ‖∂₁e‖ᵖ + ‖∂₂e‖ᵖ)^{1/p}, gradient (‖e‖ᵖ + ‖|∇e|‖ᵖ)^{1/p}, or seminorm ‖|∇e|‖_p."""
-    form = f.conventions.w1p_form
-    if form == "components":
-        parts = [f.e, f.de[0], f.de[1]]
-    elif form == "gradient":
-        parts = [f.e, np.hypot(f.de[0], f.de[1])]
-    else:
-        parts = [np.hypot(f.de[0], f.de[1])]
-    return scaled_p_sum(parts, p, f.dx)
+    parts = {"components": ("e", "d1", "d2"), "gradient": ("e", "grad")}.get(f.conventions.w1p_form, ("grad",))
+    return field_p_sum(f, parts, p)
 
 
 def w1inf_norm(f: ErrorField) -> float:
@@ -298,7 +355,7 @@ def w1inf_norm(f: ErrorField) -> float:
 
 def h1_norm(f: ErrorField) -> float:
     """(‖e‖²_{L²} + ‖∇e‖²_{L²})^{1/2}."""
-    return scaled_p_sum([f.e, f.de[0], f.de[1]], 2.0, f.dx)
+    return field_p_sum(f, ("e", "d1", "d2"), 2.0)
 
 
 def boundary_l2_norm(f: ErrorField) -> float:
@@ -341,10 +398,12 @@ def parse_norm(name: str):
 def compute_norms(field: ErrorField, names: list[str]) -> dict[str, float]:
     """The requested norms of one error field, by name."""
     funcs = {name: parse_norm(name) for name in names}  # validate all names first
-    return {name: fn(field) for name, fn in funcs.items()}
+    values = {name: fn(field) for name, fn in funcs.items()}
+    field.powers.enter((), 1.0)  # the shared powers go with the last norm
+    return values
 
 
-CHUNK_ELEMENTS = 1 << 17  # triangles per evaluation chunk: bounds memory at ~0.5 GiB
+CHUNK_ELEMENTS = 1 << 16  # triangles per evaluation chunk: its error field and shared powers take ~0.25 GiB
 
 
 def _reduction(name: str) -> tuple[str, float]:
@@ -386,8 +445,9 @@ def evaluate_norms(
         field = error_field(
             problem, mesh, u_h, conventions, norms=cell, elements=np.arange(start, min(n_el, start + chunk))
         )
-        for name in cell:
-            acc[name].append(parse_norm(name)(field))
+        for name, value in compute_norms(field, cell).items():
+            acc[name].append(value)
+        del field  # before the next chunk's is built: one chunk's arrays at a time
     for name in cell:
         kind, p = reductions[name]
         values = np.array(acc[name])
