@@ -23,6 +23,7 @@ norms evaluated to a stated accuracy, with an error estimate, are the ``<name>_t
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -105,15 +106,13 @@ class PowerCache:
         a = self.magnitude(f, name)[0]
         if not float(p).is_integer() or p < 1:
             return (a / scale) ** p
-        k, j, result = int(p), 0, None
-        while k:
+
+        def square(j: int) -> np.ndarray:
             if ("sq", name, j) not in self.store:
-                self.store["sq", name, j] = a / scale if j == 0 else self.store["sq", name, j - 1] ** 2
-            if k & 1:
-                base = self.store["sq", name, j]
-                result = base if result is None else result * base
-            k, j = k >> 1, j + 1
-        return result
+                self.store["sq", name, j] = a / scale if j == 0 else square(j - 1) * square(j - 1)
+            return self.store["sq", name, j]
+
+        return power_from_squarings(int(p), square)
 
 
 def _reference_rule(quadrature: str) -> tuple[np.ndarray, np.ndarray, int | None]:
@@ -290,20 +289,31 @@ def power_scale(values: np.ndarray) -> float:
     return _scale_of(float(np.max(np.abs(values), initial=0.0)))
 
 
+def power_from_squarings(q: int, square: Callable[[int], np.ndarray]) -> np.ndarray:
+    """``x^q`` for a positive integer ``q``: the product of the squarings ``square(j) = x^(2^j)``
+    of its set bits, in increasing ``j`` (every integer power of the norms is formed so)."""
+    k, j, result = int(q), 0, None
+    while k:
+        if k & 1:
+            result = square(j) if result is None else result * square(j)
+        k, j = k >> 1, j + 1
+    return result
+
+
 def integer_power(base: np.ndarray, q: float) -> np.ndarray:
     """``base^q`` for ``base ≥ 0``: by repeated squaring when ``q`` is a positive integer (a few
     products where ``pow`` costs tens of them: ``q = 32`` is five squarings, each adding a rounding),
     else by ``pow``."""
     if not float(q).is_integer() or q < 1:
         return base**q
-    k, result = int(q), None
-    while k:
-        if k & 1:
-            result = base if result is None else result * base
-        k >>= 1
-        if k:
-            base = base * base
-    return result
+    chain = [base]
+
+    def square(j: int) -> np.ndarray:
+        while len(chain) <= j:
+            chain.append(chain[-1] * chain[-1])
+        return chain[j]
+
+    return power_from_squarings(int(q), square)
 
 
 def scaled_p_sum(parts: list[np.ndarray], p: float, weights: np.ndarray | float = 1.0) -> float:
