@@ -121,6 +121,7 @@ TEST_SCENES = {
                   "W1inf_true"],
         "solver": "active_set",
         "problem": PROBLEM,
+        "norm_jobs": "per_mesh",  # as shipped: the convention norms of a mesh in one job
     },
     "work_precision": {
         "N": [11, 21],
