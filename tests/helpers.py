@@ -74,7 +74,7 @@ def planned_jobs(text: str) -> list[tuple[str, dict[str, str]]]:
     """(rule, wildcards) of every job in a dry run's output."""
     jobs: list[tuple[str, dict[str, str]]] = []
     for line in text.splitlines():
-        if m := re.match(r"^(?:local)?rule (\w+):$", line):
+        if m := re.match(r"^\s*(?:local)?rule (\w+):$", line):  # a group job's are indented
             jobs.append((m.group(1), {}))
         elif (m := re.match(r"^\s+wildcards: (.*)$", line)) and jobs:
             jobs[-1][1].update(kv.split("=", 1) for kv in m.group(1).split(", "))
@@ -93,7 +93,7 @@ def dry_run_jobs(text: str) -> list[dict]:
     """Every job block of a dry run's output: ``rule``, ``wildcards``, ``input``, ``output``, ``log``."""
     jobs: list[dict] = []
     for line in text.splitlines():
-        if m := re.match(r"^(?:local)?rule (\w+):$", line):
+        if m := re.match(r"^\s*(?:local)?rule (\w+):$", line):  # a group job's are indented
             jobs.append({"rule": m.group(1), "wildcards": {}, "input": [], "output": [], "log": []})
         elif jobs and (m := re.match(r"^\s+(input|output|log|wildcards): (.*)$", line)):
             key, value = m.groups()
@@ -121,6 +121,7 @@ TEST_SCENES = {
                   "W1inf_true"],
         "solver": "active_set",
         "problem": PROBLEM,
+        "norm_jobs": "per_mesh",  # as shipped: the convention norms of a mesh in one job
     },
     "work_precision": {
         "N": [11, 21],

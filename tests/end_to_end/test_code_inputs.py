@@ -90,11 +90,16 @@ def edit_matrix(built_repo, tmp_path_factory):
     return repo, {key: dry_run_jobs(text) for key, text in runs.items()}
 
 
+def script_of(repo: Path, rule: str) -> Path:
+    """A rule's script: its own name's, and norm.py for a scene's per-mesh norms rule (norms_<scene>)."""
+    return repo / "workflow/scripts" / f"{'norm' if rule.startswith('norms_') else rule}.py"
+
+
 def expected_after_edit(repo: Path, dag: list[dict], module: str) -> set:
     """The jobs whose script imports ``module`` (directly or not), and every job downstream."""
     code = {}
     for rule in {job["rule"] for job in dag} - AGGREGATES:
-        script = repo / "workflow/scripts" / f"{rule}.py"
+        script = script_of(repo, rule)
         code[rule] = {p.relative_to(repo).as_posix() for p in import_closure(script, repo / "src")}
     producer = {path: job_key(job) for job in dag for path in job["output"]}
     parents = {job_key(job): {producer[p] for p in job["input"] if p in producer} for job in dag}
@@ -156,7 +161,7 @@ def test_jobs_ran_only_modules_they_declare(edit_matrix):
         lines = [ln for ln in (repo / job["log"][0]).read_text().splitlines() if "modules run:" in ln]
         assert lines, f"{job['log'][0]}: no modules line"
         loaded = lines[-1].split("modules run: ", 1)[1].split()
-        script = repo / "workflow/scripts" / f"{job['rule']}.py"
+        script = script_of(repo, job["rule"])
         declared = {
             ".".join(p.relative_to(repo / "src").with_suffix("").parts).removesuffix(".__init__")
             for p in import_closure(script, repo / "src")

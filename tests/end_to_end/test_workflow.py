@@ -159,6 +159,26 @@ def test_up_to_date_workflow_plans_nothing(built_repo):
 PER_MESH = ("--config", "norm_jobs=per_mesh")
 
 
+def test_a_scenes_own_per_mesh_norm_jobs_batch_its_convention_norms_only(tmp_path):
+    """A scene's ``norm_jobs: per_mesh`` (the theory scene's) overrides the config's per_norm: one
+    ``norms_<scene>`` job per mesh for its norms under the conventions, a job per true norm;
+    the other scenes keep a job per norm."""
+    copy_repo(tmp_path)
+    mine = {"scenes": {"mine": {"N": [8, 16], "norms": ["L2", "W14", "L4_true"], "norm_jobs": "per_mesh"}}}
+    (tmp_path / "mine.yaml").write_text(yaml.safe_dump(mine))
+    targets = ["results/mine/errors.csv", "results/smoke/errors.csv"]
+    jobs = planned(snakemake(tmp_path, "-n", "--configfile", "mine.yaml", "--", *targets))
+    norm_jobs = sorted(
+        (rule, wc.get("scene", ""), wc["N"], wc.get("norm", "")) for rule, wc in jobs if rule.startswith("norm")
+    )
+    smoke = read_config(tmp_path / "workflow/config.yaml")["scenes"]["smoke"]
+    assert norm_jobs == sorted(
+        [("norms_mine", "", N, "") for N in ("8", "16")]  # the scene is in the rule's name
+        + [("norm", "mine", N, "L4_true") for N in ("8", "16")]
+        + [("norm", "smoke", str(N), n) for N in SMOKE_N for n in smoke["norms"]]
+    )
+
+
 def test_per_mesh_norm_jobs_compute_the_same_norms_and_switching_reruns_nothing(built_repo, tmp_path):
     """``norm_jobs: per_mesh`` (the slurm profile): one job per mesh computes all of the scene's
     norms, to the same bits as one job per norm; artifacts of either mode satisfy the other; a norm

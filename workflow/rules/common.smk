@@ -157,6 +157,17 @@ def reported(outputs, caption, category, subcategory=None):
 NORMS_RULE = "norms_{}"
 
 
+def batched_norms(scene):
+    """The norms one per-mesh job of ``scene`` computes: with norm_jobs per_mesh (the scene's own
+    setting, else the config's), its norms under the conventions, which share one error field;
+    a true norm shares nothing and stays a job of its own.  Empty with norm_jobs per_norm.
+    """
+    mode = scene_of(scene).get("norm_jobs", config["norm_jobs"])
+    if mode != "per_mesh":
+        return []
+    return [n for n in scene_of(scene)["norms"] if n != true_name(n)]
+
+
 @functools.cache
 def current_code_digest(rule):
     """The digest of a rule's code inputs now (what its jobs record at their start); a rule's
@@ -203,12 +214,12 @@ def flat(mapping):
 
 def runtime_jobs(scene):
     """The discretise, solve and norm jobs of a scene whose run times runtime.csv reports (with
-    norm_jobs: per_mesh, one job per mesh for the scene's norms: its row names them all).
+    norm_jobs: per_mesh, one job per mesh for the scene's convention norms: its row names them all).
     """
     norms = list(
         dict.fromkeys([*scene_of(scene)["norms"], *TABLE1_NORMS, *FIGURE3_NORMS])
     )
-    batched = scene_of(scene)["norms"] if config["norm_jobs"] == "per_mesh" else []
+    batched = batched_norms(scene)
     jobs = []
     for N in scene_of(scene)["N"]:
 

@@ -45,7 +45,9 @@ rule solve:
     conda:
         "../envs/signorini.yaml"
     resources:
-        mem_mb=lambda wc: resources.mem_mb(resources.solve_rule(scene_of(wc)["solver"], wc.N), wc.N),
+        mem_mb=lambda wc: resources.mem_mb(
+            resources.solve_rule(scene_of(wc)["solver"], wc.N), wc.N
+        ),
         runtime=lambda wc: resources.runtime_min("solve", wc.N),
     params:
         problem=scene_param("problem"),
@@ -80,16 +82,18 @@ rule norm:
         "../scripts/norm.py"
 
 
-# norm_jobs: per_mesh (the slurm profile): one job per mesh computes all of its scene's norms,
-# since on a cluster every job pays a scheduling round trip and a Snakemake start. Same script,
-# inputs and parameters as `norm`, so artifacts of either mode are interchangeable: switching
-# reruns nothing. Norms outside the scene's list (a target's extra norms) stay one job each.
-if config["norm_jobs"] == "per_mesh":
-    for _scene in config["scenes"]:
-        _norms = scene_of(_scene)["norms"]
+# norm_jobs: per_mesh (the slurm profile, or a scene's own setting): one job per mesh computes
+# all of its scene's norms under the conventions from one error field, since on a cluster every
+# job pays a scheduling round trip and a Snakemake start, and anywhere the evaluation is shared.
+# Same script, inputs and parameters as `norm`, so artifacts of either mode are interchangeable:
+# switching reruns nothing. True norms (nothing to share) and norms outside the scene's list (a
+# target's extra norms) stay one job each.
+for _scene in config["scenes"]:
+    _norms = batched_norms(_scene)
+    if _norms:
 
         rule:
-            """All of a scene's norms of the error u - u_h on one mesh, one after another."""
+            """A scene's norms of the error u - u_h under the conventions on one mesh, together."""
             name:
                 NORMS_RULE.format(_scene)
             input:

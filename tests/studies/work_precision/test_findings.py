@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from signorini.studies.work_precision.findings import (
     fastest_to_digits,
@@ -56,3 +57,17 @@ def test_concurrent_jobs_counts_the_largest_overlap_of_job_intervals():
     two_cores = np.array([0.0, 1.0, 12.0, 13.0, np.nan]), np.array([11.0, 12.0, 20.0, 14.0, np.nan])
     assert concurrent_jobs(*two_cores) == 2
     assert concurrent_jobs(np.array([0.0, 1.0, 2.0]), np.array([9.0, 9.0, 9.0])) == 3
+
+
+def test_kernel_spread_is_the_largest_range_of_the_job_medians_of_one_mesh():
+    import pandas as pd
+
+    from signorini.studies.work_precision.findings import kernel_spread
+
+    rows = [  # N, config, ref_s per run: job medians 1.0 and 1.1 at N = 11, 2.0 and 2.0 at N = 21
+        (11, "a", 1.0), (11, "a", 1.0), (11, "a", 5.0), (11, "b", 1.1),
+        (21, "a", 2.0), (21, "b", 2.0), (21, "c", np.nan),
+    ]
+    df = pd.DataFrame(rows, columns=["N", "config", "ref_s"])
+    assert kernel_spread(df) == pytest.approx(0.1 / 1.05)
+    assert math.isnan(kernel_spread(df[df["N"] == 21].iloc[:1]))

@@ -40,6 +40,7 @@ from signorini.fem.assembly import (
     _quadrature_measure,
     system_matrix,
 )
+from signorini.fem.derivatives import u_and_grad_u
 from signorini.fem.problem import Problem
 
 if TYPE_CHECKING:
@@ -71,13 +72,13 @@ def ritz_rhs(problem: Problem, mesh: MeshTri, chunk: int = CHUNK_ELEMENTS) -> np
         A, shift, det, inv = _affine_maps(mesh.p, t)
         x = (np.einsum("ijk,jl", A, X).T + shift.T).T  # (2, E, q): the quadrature points
         dx = _quadrature_measure(det, W)  # (E, q)
-        gu = problem.grad_u(x)
+        u, gu = u_and_grad_u(problem, x)
         flux = np.stack([np.sum(gu[d] * dx, axis=1) for d in range(2)])  # ∫_T ∇u, (2, E)
-        mass = (problem.u(x) * dx) @ values.T  # ∫_T u φ_k, (E, 3)
+        mass = (u * dx) @ values.T  # ∫_T u φ_k, (E, 3)
         for k in range(3):
             grad_phi = np.einsum("ije,i->je", inv, _REFERENCE_GRADIENTS[k])  # J⁻ᵀ ∇̂φ_k, (2, E)
             b += np.bincount(t[k], flux[0] * grad_phi[0] + flux[1] * grad_phi[1] + problem.c * mass[:, k], minlength=n)
-        del x, dx, gu, flux, mass
+        del x, dx, u, gu, flux, mass
     return b
 
 

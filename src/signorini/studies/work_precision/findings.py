@@ -335,6 +335,21 @@ def peer_comparison(df: pd.DataFrame, table1_norms: Sequence[str]) -> dict[str, 
     return _peers(df, Ns, [n for n in table1_norms if f"total_{n}" in df.columns])
 
 
+def kernel_spread(df: pd.DataFrame) -> float:
+    """The largest relative range (max − min) / median, over the meshes, of the reference kernel's
+    CPU time between the jobs of one mesh (each job: the median over its runs): how far two jobs'
+    reference units can disagree for the kernel alone; NaN without two timed jobs on one mesh."""
+    ref = pd_numeric(df, "ref_s")
+    timed = df.assign(_ref=ref)[np.isfinite(ref)]
+    per_job = timed.groupby(["N", "config"])["_ref"].median()
+    ranges = [
+        (float(v.max()) - float(v.min())) / float(v.median())
+        for _, v in per_job.groupby(level="N")
+        if len(v) > 1 and float(v.median()) > 0
+    ]
+    return max(ranges) if ranges else math.nan
+
+
 def _protocol(df: pd.DataFrame) -> dict[str, Any]:
     """What the timing protocol did (tables measured under it): repeats per run, spread, samples
     rejected and redone, runs accepted under load after the last retry, CPU share, the time key."""
@@ -356,6 +371,7 @@ def _protocol(df: pd.DataFrame) -> dict[str, Any]:
         "rejected": int(np.nansum(col("rejected"))),
         "loaded": int(np.nansum(col("loaded"))),
         "cpu_share_median": float(np.nanmedian(share)) if np.isfinite(share).any() else math.nan,
+        "kernel_spread": kernel_spread(timed),
     }
 
 

@@ -59,6 +59,11 @@ PROTOCOL = (
     "kept a call under such a load after the last retry. Rankings and ratios below are in reference units, times "
     "in CPU seconds; the CSV also has the wall times (`wall_s`) and the loads of every run."
 )
+KERNEL_SPREAD = (
+    " The kernel's own CPU time (the median of a job's kernels) differed between the jobs of one mesh by up to "
+    "{kernel_spread:.0%}: a ratio between two jobs in reference units carries that much uncertainty from the "
+    "kernel alone."
+)
 PROTOCOL_OLD = (
     "- **Timing.** This table predates the timing protocol: wall times, best of 3 when under 1 s, at the load above; "
     "the ratios between solvers move with the load."
@@ -105,7 +110,10 @@ def _setup(df, found: Mapping, source: str, protocol: Protocol) -> list[str]:
     if found.get("load"):
         lines.append(LOAD.format(**found["load"]))
     protocol, timing = found.get("protocol", {}), protocol
-    lines.append(PROTOCOL.format(**protocol, **_protocol_settings(timing)) if "runs" in protocol else PROTOCOL_OLD)
+    text = PROTOCOL.format(**protocol, **_protocol_settings(timing)) if "runs" in protocol else PROTOCOL_OLD
+    if math.isfinite(protocol.get("kernel_spread", math.nan)):
+        text += KERNEL_SPREAD.format(kernel_spread=protocol["kernel_spread"])
+    lines.append(text)
     if math.isfinite(found.get("span_s", math.nan)):
         concurrent = found.get("concurrent_jobs", 0)
         at_once = "one job" if concurrent == 1 else f"{concurrent} jobs"
