@@ -460,3 +460,31 @@ def test_shared_powers_give_each_norm_its_own_value_bit_for_bit():
                 assert field_p_sum(f, group, p) == scaled_p_sum(arrays, p, f.dx), (group, p)
             held = {key[1] for key in f.powers.store}
             assert held <= set(group) and set(names) >= held
+
+
+def test_the_norms_of_many_chunks_hold_one_chunks_arrays_at_a_time():
+    """The memory of ``evaluate_norms`` is that of one chunk, however many chunks a mesh has: the
+    arrays of a chunk (its error field, the shared powers) are gone before the next one's, without
+    the cycle collector (which large arrays and few objects seldom wake)."""
+    import gc
+    import tracemalloc
+
+    from signorini.fem.discrete import build
+    from signorini.fem.norms.conventional import evaluate_norms
+    from signorini.fem.problem import Problem
+    from signorini.fem.solve import solve_discrete
+
+    peaks = {}
+    for N in (13, 61):  # 338 and 7442 triangles: 2 and 30 chunks of 256
+        disc = build(Problem(), N, "sw_ne")
+        u_h = solve_discrete(disc).u
+        gc.collect()
+        gc.disable()
+        tracemalloc.start()
+        try:
+            evaluate_norms(disc.problem, disc.mesh, u_h, ["W14", "L4", "L16", "W116"], chunk=256)
+            peaks[N] = tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
+            gc.enable()
+    assert peaks[61] < 2.0 * peaks[13], peaks

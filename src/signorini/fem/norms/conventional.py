@@ -107,10 +107,13 @@ class PowerCache:
         if not float(p).is_integer() or p < 1:
             return (a / scale) ** p
 
-        def square(j: int) -> np.ndarray:
-            if ("sq", name, j) not in self.store:
-                self.store["sq", name, j] = a / scale if j == 0 else square(j - 1) * square(j - 1)
-            return self.store["sq", name, j]
+        def square(j: int) -> np.ndarray:  # a loop, not a recursion: no reference cycle holds ``a``
+            store = self.store
+            for i in range(j + 1):
+                if ("sq", name, i) not in store:
+                    below = store["sq", name, i - 1] if i else None
+                    store["sq", name, i] = a / scale if i == 0 else below * below
+            return store["sq", name, j]
 
         return power_from_squarings(int(p), square)
 
