@@ -108,9 +108,12 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     t0 = time.time()
     git = ["git", "-C", str(ROOT)]
-    revision = subprocess.run([*git, "rev-parse", args.baseline], capture_output=True, text=True, check=True)
-    head = subprocess.run([*git, "rev-parse", "HEAD"], capture_output=True, text=True, check=True)
-    dirty = subprocess.run([*git, "status", "--porcelain", "src"], capture_output=True, text=True, check=True)
+
+    def ask(*words: str) -> str:
+        return subprocess.run([*git, *words], capture_output=True, text=True, encoding="utf-8", check=True).stdout
+
+    revision, head = ask("rev-parse", args.baseline), ask("rev-parse", "HEAD")
+    dirty = ask("status", "--porcelain", "src")
     with tempfile.TemporaryDirectory() as tmp:
         worktree = Path(tmp) / "baseline"
         subprocess.run([*git, "worktree", "add", "--detach", str(worktree), args.baseline], check=True)
@@ -122,8 +125,8 @@ def main(argv: list[str] | None = None) -> int:
         "date": time.strftime("%Y-%m-%d %H:%M"),
         "N": args.N,
         "unknowns": (args.N + 1) ** 2,
-        "baseline": revision.stdout.strip(),
-        "tree": head.stdout.strip() + (" (with uncommitted changes in src/)" if dirty.stdout.strip() else ""),
+        "baseline": revision.strip(),
+        "tree": head.strip() + (" (with uncommitted changes in src/)" if dirty.strip() else ""),
         "repeats": args.repeats,
         **result,
         "wall_s": time.time() - t0,
