@@ -78,3 +78,29 @@ def test_wrong_inexact_steps_go_on_until_an_accurate_solve_settles(cache):
     assert np.all(u[differ] == 0.0) and np.all(np.abs(residual[differ]) <= 1e-14 * np.abs(b).max())
     with pytest.raises(NotConvergedError, match="max_iter"):
         _run(disc, Recorded(A, b, 40, "auto"), max_iter=2)
+
+
+@pytest.mark.parametrize("route", ["active_set", "multigrid"])
+def test_a_route_uses_a_canonical_matrix_as_it_is_and_changes_none(cache, route):
+    """A CSR matrix with sorted, summed indices is not copied (prepare_qp hands it on), and no
+    route writes to it or to b; any other matrix is copied before it is put in that form."""
+    import scipy.sparse as sp
+
+    from signorini.solvers import solve
+
+    disc = cache.discrete({}, 21)
+    A, b = disc.A.tocsr(), disc.b.copy()
+    assert A.has_canonical_format
+    assert np.shares_memory(prepare_qp(A, b, disc.boundary)[0].data, A.data)
+    before = (A.data.copy(), A.indices.copy(), A.indptr.copy(), b.copy())
+    solve(route, A, b, disc.boundary, warm_start=None)
+    for now, then in zip((A.data, A.indices, A.indptr, b), before, strict=True):
+        np.testing.assert_array_equal(now, then)
+    # each row's entries reversed: not canonical, so prepare_qp sorts a copy
+    order = np.concatenate([np.arange(A.indptr[i], A.indptr[i + 1])[::-1] for i in range(A.shape[0])])
+    messy = sp.csr_matrix((A.data[order], A.indices[order], A.indptr.copy()), shape=A.shape)
+    assert not messy.has_canonical_format
+    kept = messy.indices.copy()
+    tidy = prepare_qp(messy, b, disc.boundary)[0]
+    assert not np.shares_memory(tidy.data, messy.data) and (tidy != A).nnz == 0
+    np.testing.assert_array_equal(messy.indices, kept)
