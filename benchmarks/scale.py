@@ -89,11 +89,17 @@ def _direct_fits(N: int) -> str | None:
     return None if need <= 0.9 * have else f"predicted {need / 1024:.1f} GiB > 90 % of {have / 1024:.1f} GiB"
 
 
-def _child(stage: str, N: int, workdir: Path, timeout_s: float) -> dict:
+def run_child(stage: str, N: int, workdir: Path, timeout_s: float, src: Path | None = None) -> dict:
+    """One stage on mesh N in a child process (``run_stage``), with ``signorini`` imported from
+    ``src`` if given (``benchmarks/stage_jobs.py``: another tree's): its record, and the load
+    average before and after."""
     load0 = os.getloadavg()[0]
     cmd = [sys.executable, __file__, "--child", stage, "--N", str(N), "--workdir", str(workdir)]
+    env = {**os.environ, "PYTHONPATH": str(src)} if src is not None else None
     try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, encoding="utf-8", timeout=timeout_s, cwd=ROOT)
+        proc = subprocess.run(
+            cmd, capture_output=True, text=True, encoding="utf-8", timeout=timeout_s, cwd=ROOT, env=env
+        )
     except subprocess.TimeoutExpired:
         return {"skipped": f"longer than {timeout_s:g} s", "load1": [load0, os.getloadavg()[0]]}
     if proc.returncode != 0:
@@ -132,7 +138,7 @@ def measure(
             if stage == "solve_direct" and (why := _direct_fits(N)):
                 records[stage][str(N)] = {"skipped": why}
             else:
-                records[stage][str(N)] = _child(stage, N, workdir, timeout_s)
+                records[stage][str(N)] = run_child(stage, N, workdir, timeout_s)
             print(f"N={N} {stage}: {records[stage][str(N)]}", file=sys.stderr, flush=True)
             if save:
                 save(summarise(Ns, records))

@@ -19,6 +19,7 @@ load average before and after every run (``loaded_runs``: the runs under a load 
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import os
 import statistics
@@ -32,19 +33,18 @@ ROOT = Path(__file__).resolve().parents[1]
 SCALE = ROOT / "benchmarks/scale.py"
 
 
+def _scale():
+    """``benchmarks/scale.py`` as a module: its child runs one stage as the pipeline's job does."""
+    spec = importlib.util.spec_from_file_location("scale_benchmark", SCALE)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def run_job(stage: str, N: int, workdir: Path, src: Path, timeout_s: float) -> dict:
     """One job of ``stage`` on mesh N with ``signorini`` imported from ``src``: its CPU and wall
     seconds, peak RSS and the load average before and after (or why it failed)."""
-    load0 = os.getloadavg()[0]
-    cmd = [sys.executable, str(SCALE), "--child", stage, "--N", str(N), "--workdir", str(workdir)]
-    env = {**os.environ, "PYTHONPATH": str(src)}
-    try:
-        proc = subprocess.run(cmd, capture_output=True, text=True, encoding="utf-8", timeout=timeout_s, env=env)
-    except subprocess.TimeoutExpired:
-        return {"failed": f"longer than {timeout_s:g} s", "load1": [load0, os.getloadavg()[0]]}
-    if proc.returncode != 0:
-        return {"failed": proc.stderr.strip().splitlines()[-1:], "load1": [load0, os.getloadavg()[0]]}
-    return json.loads(proc.stdout.strip().splitlines()[-1]) | {"load1": [load0, os.getloadavg()[0]]}
+    return _scale().run_child(stage, N, workdir, timeout_s, src=src)
 
 
 def summarise(runs: dict[str, list[dict]]) -> dict:
@@ -57,7 +57,7 @@ def summarise(runs: dict[str, list[dict]]) -> dict:
             "cpu_s": cpu,
             "median_cpu_s": statistics.median(cpu) if cpu else None,
             "peak_rss_gib": max((r["peak_rss_gib"] for r in records if "peak_rss_gib" in r), default=None),
-            "failed": [r["failed"] for r in records if "failed" in r],
+            "failed": [r.get("failed") or r.get("skipped") for r in records if "cpu_s" not in r],
         }
     pairs = [
         t["cpu_s"] / b["cpu_s"]
@@ -74,8 +74,8 @@ def measure(args: argparse.Namespace, baseline_src: Path) -> dict:
         name = "system.npz" if stage == "discretise" else "solution_multigrid.npz"
         if not (args.workdir / f"N{args.N}" / name).exists():
             made = run_job(stage, args.N, args.workdir, trees["tree"], args.timeout)
-            if "failed" in made:
-                raise SystemExit(f"{stage} at N = {args.N} failed: {made['failed']}")
+            if "cpu_s" not in made:
+                raise SystemExit(f"{stage} at N = {args.N} failed: {made}")
     stages, loads, loaded = {}, [], []
     cores = os.cpu_count() or 1
     for stage in args.stages:
