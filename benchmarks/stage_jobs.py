@@ -19,6 +19,7 @@ load average before and after every run (``loaded_runs``: the runs under a load 
 from __future__ import annotations
 
 import argparse
+import functools
 import importlib.util
 import json
 import os
@@ -33,6 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SCALE = ROOT / "benchmarks/scale.py"
 
 
+@functools.cache
 def _scale():
     """``benchmarks/scale.py`` as a module: its child runs one stage as the pipeline's job does."""
     spec = importlib.util.spec_from_file_location("scale_benchmark", SCALE)

@@ -163,7 +163,7 @@ def _affine_maps(p: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, 
     return A, b, det, inv
 
 
-def _p1_values(X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def p1_values(X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The P1 shape functions at reference points ``X`` (``ElementTriP1.lbasis``)."""
     x, y = X
     return 1.0 - x - y, x, y
@@ -186,7 +186,7 @@ def _local_matrices(p: np.ndarray, t: np.ndarray, c: float, intorder: int = 2) -
     zero = 0.0 * X[0]
     dphi = (np.array([-1.0 + zero, -1.0 + zero]), np.array([1.0 + zero, zero]), np.array([zero, 1.0 + zero]))
     grads = [np.einsum("ijkl,il->jkl", invDF, d) for d in dphi]
-    values = [np.broadcast_to(v, (nt, q)) for v in _p1_values(X)]
+    values = [np.broadcast_to(v, (nt, q)) for v in p1_values(X)]
     dx = _quadrature_measure(det, W)
     data = np.empty((3, 3, nt))
     for j in range(3):
@@ -322,21 +322,34 @@ def load_vector(target: Basis | MeshTri, problem: Problem, chunk: int = CHUNK_EL
     scikit-fem's order (basis function, then triangle) and the chunks in order; but ``f``
     is evaluated once per quadrature point, and only the chunk's points exist at a time.
     """
-    if isinstance(chunk, bool) or int(chunk) < 1:
-        raise ValueError(f"chunk={chunk!r} must be a positive number of triangles")
-    mesh, (X, W) = _mesh_and_quadrature(target, INTORDER)
-    n, n_el = mesh.p.shape[1], mesh.t.shape[1]
+    mesh, (X, _) = _mesh_and_quadrature(target, INTORDER)
+    n = mesh.p.shape[1]
     b = np.zeros(n)
-    for start in range(0, n_el, int(chunk)):
-        t = mesh.t[:, start : min(n_el, start + int(chunk))]
-        A, shift, det, _ = _affine_maps(mesh.p, t)
-        x = (np.einsum("ijk,jl", A, X).T + shift.T).T  # MappingAffine.F
-        fx, dx = problem.f(x), _quadrature_measure(det, W)
-        values = [np.broadcast_to(v, dx.shape) for v in _p1_values(X)]
+    for t, x, dx, _ in quadrature_chunks(target, chunk):
+        fx = problem.f(x)
+        values = [np.broadcast_to(v, dx.shape) for v in p1_values(X)]
         weights = np.concatenate([np.sum(fx * v * dx, axis=1) for v in values])
         b += np.bincount(t.ravel(), weights, minlength=n)  # sequential, as scipy's COO-to-dense sum
         del x, fx, dx, weights
     return b
+
+
+def quadrature_chunks(
+    target: Basis | MeshTri, chunk: int = CHUNK_ELEMENTS, intorder: int = INTORDER
+) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    """Per chunk of at most ``chunk`` consecutive triangles ``t`` (3, E): the quadrature points
+    ``x`` (2, E, q), the weights ``|det A| w_q`` (E, q) and the inverse maps ``A⁻¹`` (2, 2, E),
+    with scikit-fem's operations (``MappingAffine``) and the rule of ``target`` (a basis's own, or
+    the degree-``intorder`` rule of a mesh); only one chunk's arrays exist at a time."""
+    if isinstance(chunk, bool) or int(chunk) < 1:
+        raise ValueError(f"chunk={chunk!r} must be a positive number of triangles")
+    mesh, (X, W) = _mesh_and_quadrature(target, intorder)
+    n_el = mesh.t.shape[1]
+    for start in range(0, n_el, int(chunk)):
+        t = mesh.t[:, start : min(n_el, start + int(chunk))]
+        A, shift, det, inv = _affine_maps(mesh.p, t)
+        x = (np.einsum("ijk,jl", A, X).T + shift.T).T  # MappingAffine.F
+        yield t, x, _quadrature_measure(det, W), inv
 
 
 def assemble(mesh: MeshTri, problem: Problem) -> tuple[sp.csr_matrix, np.ndarray]:

@@ -28,18 +28,10 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 from skfem import MeshTri
+from skfem.quadrature import get_quadrature
+from skfem.refdom import RefTri
 
-# the assembly's own affine maps and P1 shape functions: the right-hand side below uses the
-# operations of the load vector, with ∇u·∇φ + c u φ in place of f φ
-from signorini.fem.assembly import (
-    CHUNK_ELEMENTS,
-    INTORDER,
-    _affine_maps,
-    _mesh_and_quadrature,
-    _p1_values,
-    _quadrature_measure,
-    system_matrix,
-)
+from signorini.fem.assembly import CHUNK_ELEMENTS, INTORDER, p1_values, quadrature_chunks, system_matrix
 from signorini.fem.derivatives import u_and_grad_u
 from signorini.fem.problem import Problem
 
@@ -61,17 +53,11 @@ def ritz_rhs(problem: Problem, mesh: MeshTri, chunk: int = CHUNK_ELEMENTS) -> np
     triangles (bounded memory at N = 4001); ``u`` and ``∇u`` are evaluated once per quadrature
     point, and the P1 gradients, constant on a triangle, once per triangle.
     """
-    if isinstance(chunk, bool) or int(chunk) < 1:
-        raise ValueError(f"chunk={chunk!r} must be a positive number of triangles")
-    _, (X, W) = _mesh_and_quadrature(mesh, INTORDER)
-    values = np.stack(_p1_values(X))  # (shape function, q)
-    n, n_el = mesh.p.shape[1], mesh.t.shape[1]
+    X, _ = get_quadrature(RefTri, INTORDER)
+    values = np.stack(p1_values(X))  # (shape function, q)
+    n = mesh.p.shape[1]
     b = np.zeros(n)
-    for start in range(0, n_el, int(chunk)):
-        t = mesh.t[:, start : min(n_el, start + int(chunk))]
-        A, shift, det, inv = _affine_maps(mesh.p, t)
-        x = (np.einsum("ijk,jl", A, X).T + shift.T).T  # (2, E, q): the quadrature points
-        dx = _quadrature_measure(det, W)  # (E, q)
+    for t, x, dx, inv in quadrature_chunks(mesh, chunk):
         u, gu = u_and_grad_u(problem, x)
         flux = np.stack([np.sum(gu[d] * dx, axis=1) for d in range(2)])  # ∫_T ∇u, (2, E)
         mass = (u * dx) @ values.T  # ∫_T u φ_k, (E, 3)
