@@ -12,12 +12,16 @@ they are timed round-robin under the protocol of ``signorini.studies.work_precis
 updates and small matrix products, memory traffic as well as arithmetic; ``spin``: a Python
 loop) are started, the same slice is timed again, and they are stopped.
 
+The protocol is the shipped study's (its ``timing:`` block in ``workflow/config.yaml``) with the
+load limit of one process (``--max-load``, default: the cores).
+
 Written (atomically): both runs with every solver's times (CPU, wall; reference units) and
 status, the loads (1-minute load average, median and range per run), the change factor of the
 absolute times (loaded / quiet, median over solvers), and ``worst_ratio_change``: the largest
-relative change, between the two runs, of a solver's time ratio to the reference solver
-(reference units; also given for the CPU and the wall-clock ratios).  Goal: ≤ ``GOAL`` while the
-wall times change by about 2×.  Solvers that failed in either run are left out of the change.
+relative change, between the two runs, of a solver's CPU-time ratio to the reference solver (the
+study ranks by CPU time; ``worst_ratio_change_ref`` and ``_wall``: the same for the ratios of
+reference units and of wall-clock times).  Goal: ≤ ``GOAL`` while the wall times change by
+about 2×.  Solvers that failed in either run are left out of the change.
 """
 
 from __future__ import annotations
@@ -85,12 +89,17 @@ class Busy:
         return False
 
 
+def shipped_study() -> dict:
+    """The ``study`` block of the shipped work-precision scene."""
+    scenes = yaml.safe_load((ROOT / "workflow/config.yaml").read_text(encoding="utf-8"))["scenes"]
+    return scenes["work_precision"]["study"]
+
+
 def configs(names: list[str]):
     from signorini.solvers import installed_qp_solvers
     from signorini.studies.work_precision.study import study_configs
 
-    study = yaml.safe_load((ROOT / "workflow/config.yaml").read_text(encoding="utf-8"))["scenes"]["work_precision"]
-    found = study_configs(study["study"], installed_qp_solvers())
+    found = study_configs(shipped_study(), installed_qp_solvers())
     missing = [n for n in names if n not in found]
     if missing:
         raise SystemExit(f"not configurations of the study: {missing}")
@@ -184,7 +193,8 @@ def main(argv: list[str] | None = None) -> int:
     found = probe(args.python, ROOT / "workflow/peers/petsc_peer.py")
     names = args.solvers.split(",") + ([p for p in args.peers.split(",") if p] if found.get("petsc4py") else [])
     chosen = configs(names)
-    protocol = Protocol(max_load=args.max_load, wait_s=10.0, retries=1, max_wait_total_s=120.0)
+    # the study's protocol; the load limit of one process (the study's allows for its two jobs)
+    protocol = Protocol.from_mapping({**shipped_study().get("timing", {}), "max_load": args.max_load})
     started = time.time()
     print(f"quiet run (load {os.getloadavg()[0]:.1f}): {', '.join(chosen)} at N = {Ns}", flush=True)
     quiet = one_run(Ns, chosen, args.tol, Timer(protocol), args.python, found, args.time_limit)
@@ -209,11 +219,11 @@ def main(argv: list[str] | None = None) -> int:
         "loads": {"quiet": loads(quiet), "loaded": loads(loaded)},
         "time_change": {k: time_change(quiet, loaded, k) for k in ("wall_s", "time_s", "time_ref")},
         "ratio_changes": changes,
-        "worst_ratio_change": worst["ratio_ref"],
-        "worst_ratio_change_cpu": worst["ratio_cpu"],
+        "worst_ratio_change": worst["ratio_cpu"],
+        "worst_ratio_change_ref": worst["ratio_ref"],
         "worst_ratio_change_wall": worst["ratio_wall"],
         "goal": GOAL,
-        "met": bool(worst["ratio_ref"] <= GOAL),
+        "met": bool(worst["ratio_cpu"] <= GOAL),
         "started": started,
         "wall_s": time.time() - started,
         "python": sys.version.split()[0],
@@ -222,7 +232,7 @@ def main(argv: list[str] | None = None) -> int:
     save_json(args.out, result)
     print(f"absolute times loaded/quiet: {result['time_change']}")
     print(
-        f"worst ratio change: reference units {worst['ratio_ref']:.3f}, CPU {worst['ratio_cpu']:.3f}, "
+        f"worst ratio change: CPU {worst['ratio_cpu']:.3f}, reference units {worst['ratio_ref']:.3f}, "
         f"wall {worst['ratio_wall']:.3f} (goal ≤ {GOAL}) -> {args.out}"
     )
     return 0

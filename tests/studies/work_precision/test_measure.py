@@ -265,7 +265,7 @@ def test_findings_on_a_synthetic_table():
         "exact": {"tol_label": "exact", "time_s": 0.04, "rank": 0.04},
         "qp": {"tol_label": "1e-06", "time_s": 0.08, "rank": 0.08},
     }
-    assert found["protocol"] == {"key": "time_s"}
+    assert found["protocol"] == {"key": "time_s", "measured": False}
 
 
 def _race_row(N: int, config: str, start: str, tol_label: str, time_s: float, time_ref: float, **kw) -> dict:
@@ -301,7 +301,7 @@ def _race_row(N: int, config: str, start: str, tol_label: str, time_s: float, ti
 
 def test_fair_race_same_warm_start_and_cold_against_cold():
     """Ours from the cascade against the peers from the cascade start, ours cold against the
-    peers from u = 0; ranked and divided in reference units (the seconds would rank otherwise)."""
+    peers from u = 0; ranked and divided in CPU seconds (the reference units would rank otherwise)."""
     rows = []
     for N in (101, 201):
         rows += [
@@ -309,16 +309,16 @@ def test_fair_race_same_warm_start_and_cold_against_cold():
             _race_row(N, "ours_cold", "cold", "exact", 4.0, 8.0),
             _race_row(N, "tron", "cold", "1e-08", 3.0, 12.0),
             _race_row(N, "tron_ws", "cascade", "1e-08", 2.0, 3.0),
-            _race_row(N, "rsls_ws", "cascade", "1e-08", 1.5, 5.0),  # fewer seconds, more reference units
+            _race_row(N, "rsls_ws", "cascade", "1e-08", 2.5, 2.5),  # more seconds, fewer reference units
         ]
     found = wpf.findings(pd.DataFrame(rows), ["L4"])
     warm, cold = found["fair"]["same_warm_start"], found["fair"]["cold_against_cold"]
     assert [(r["N"], r["ours"], r["other"], r["ratio"]) for r in warm] == [
-        (101, "ours", "tron_ws", 1.5),
-        (201, "ours", "tron_ws", 1.5),
+        (101, "ours", "tron_ws", 2.0),
+        (201, "ours", "tron_ws", 2.0),
     ]
-    assert [(r["other"], r["ratio"], r["other_s"]) for r in cold] == [("tron", 1.5, 3.0)] * 2
-    assert found["protocol"]["key"] == "time_ref" and found["protocol"]["repeats_median"] == 3
+    assert [(r["other"], r["ratio"], r["other_s"]) for r in cold] == [("tron", 0.75, 3.0)] * 2
+    assert found["protocol"]["key"] == "time_s" and found["protocol"]["repeats_median"] == 3
     from signorini.studies.work_precision.report import work_precision_md
 
     md = work_precision_md(pd.DataFrame(rows), found)
@@ -328,7 +328,7 @@ def test_fair_race_same_warm_start_and_cold_against_cold():
 
 def test_figure_draws_the_fastest_configuration_per_family_with_the_legend_below():
     """Exact solvers plus one configuration per solver family (the fastest to Table 1's digits on
-    the finest mesh, in reference units), at most eight, Okabe–Ito colours, legends below the axes."""
+    the finest mesh, in CPU seconds), at most eight, Okabe–Ito colours, legends below the axes."""
     from signorini.studies.work_precision import figures as wpfig
 
     rows = []
@@ -338,8 +338,8 @@ def test_figure_draws_the_fastest_configuration_per_family_with_the_legend_below
             _race_row(N, "ours_cold", "cold", "exact", 4.0, 8.0),
             _race_row(N, "ours_superlu", "cascade", "exact", 2.0, 4.0),
         ]
-        for k in range(4):  # four TAO methods: the one with the fewest reference units is drawn
-            rows.append(_race_row(N, f"tao{k}", "cold", "1e-08", 1.0 + k, 12.0 - k))
+        for k in range(4):  # four TAO methods: the one with the fewest CPU seconds is drawn
+            rows.append(_race_row(N, f"tao{k}", "cold", "1e-08", 4.0 - k, 9.0 + k))
         for k in range(5):  # five QP solvers, one family each
             rows.append(_race_row(N, f"qp{k}", "cold", "1e-08", 1.0, 20.0, solver=f"QP{k}"))
     df = pd.DataFrame(rows)

@@ -34,7 +34,7 @@ def family(solver: str) -> str:
 
 def figure_series(df, table1_norms: Sequence[str] | None = None) -> list[str]:
     """The configurations drawn: every exact one, and per other solver family the fastest
-    configuration (reference units where measured) to Table 1's digits on the finest mesh (none
+    configuration (CPU seconds) to Table 1's digits on the finest mesh (none
     keeps them: the family's fastest run of status ok there; its first configuration otherwise).
     Beyond ``MAX_SERIES`` (the palette), only the first exact configuration of each start
     (cascade, cold) stays (a backend variant goes; its runs are in the CSV and the report)."""
@@ -219,9 +219,9 @@ def work_precision_figure(df, figure_N: Sequence[int] = (), fig=None, configs: S
 
 
 def _time_label(df) -> str:
-    from signorini.studies.work_precision.findings import rank_key
+    from signorini.studies.work_precision.findings import measured_under_protocol
 
-    return "solve time [CPU s]" if rank_key(df) == "time_ref" else "solve time [s]"
+    return "solve time [CPU s]" if measured_under_protocol(df) else "solve time [s]"
 
 
 def _exact_runs(df):

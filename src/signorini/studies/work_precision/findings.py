@@ -92,11 +92,17 @@ def _needed(cells: Sequence[Mapping]) -> dict[str, str | None]:
     return needed
 
 
+def measured_under_protocol(df: pd.DataFrame) -> bool:
+    """Whether the table was measured under the timing protocol (it has reference units)."""
+    return "time_ref" in df.columns and bool(np.isfinite(df["time_ref"].to_numpy(dtype=float)).any())
+
+
 def rank_key(df: pd.DataFrame) -> str:
-    """The column that ranks run times: ``time_ref`` (reference units, the timing protocol's)
-    when the table has it, else ``time_s`` (tables measured before the protocol)."""
-    if "time_ref" in df.columns and np.isfinite(df["time_ref"].to_numpy(dtype=float)).any():
-        return "time_ref"
+    """The column that ranks run times: ``time_s``, CPU seconds under the timing protocol (wall
+    seconds in tables measured before it).  Not the reference units ``time_ref``: on this machine
+    the reference kernel's time varies from sample to sample about as much as a call's, even
+    within one round-robin, so dividing by it adds that noise; between a quiet run and one beside
+    busy processes the CPU-time ratios moved less (``docs/evidence/timing_robustness*.json``)."""
     return "time_s"
 
 
@@ -114,7 +120,7 @@ def starts(df: pd.DataFrame) -> pd.Series:
 
 def _cheapest(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> dict[int, dict[str, dict]]:
     """Per N and config, the fastest run (by ``rank_key``) that leaves Table 1's row of that N
-    unchanged: its tolerance, seconds and reference units."""
+    unchanged: its tolerance, its seconds and the value it is ranked by."""
     key = rank_key(df)
     cheapest: dict[int, dict[str, dict]] = {}
     for N in Ns:
@@ -337,8 +343,9 @@ def peer_comparison(df: pd.DataFrame, table1_norms: Sequence[str]) -> dict[str, 
 
 def kernel_spread(df: pd.DataFrame) -> float:
     """The largest relative range (max − min) / median, over the meshes, of the reference kernel's
-    CPU time between the jobs of one mesh (each job: the median over its runs): how far two jobs'
-    reference units can disagree for the kernel alone; NaN without two timed jobs on one mesh."""
+    CPU time between the jobs of one mesh (each job: the median over its runs): an upper estimate
+    of how much the whole machine's speed changed between those jobs (the kernel's own noise
+    included); NaN without two timed jobs on one mesh."""
     ref = pd_numeric(df, "ref_s")
     timed = df.assign(_ref=ref)[np.isfinite(ref)]
     per_job = timed.groupby(["N", "config"])["_ref"].median()
@@ -352,10 +359,11 @@ def kernel_spread(df: pd.DataFrame) -> float:
 
 def _protocol(df: pd.DataFrame) -> dict[str, Any]:
     """What the timing protocol did (tables measured under it): repeats per run, spread, samples
-    rejected and redone, runs accepted under load after the last retry, CPU share, the time key."""
+    rejected and redone, runs accepted under load after the last retry, CPU share, the time key,
+    whether the table was measured under the protocol at all."""
     timed = df[df["status"] != "skipped"]
-    if "time_ref" not in df.columns or timed.empty:
-        return {"key": rank_key(df)}
+    if not measured_under_protocol(df) or timed.empty:
+        return {"key": rank_key(df), "measured": False}
 
     def col(name: str) -> np.ndarray:
         return pd_numeric(timed, name)
@@ -363,6 +371,7 @@ def _protocol(df: pd.DataFrame) -> dict[str, Any]:
     runs, spread, share, calls = col("time_runs"), col("spread"), col("cpu_share"), col("calls")
     return {
         "key": rank_key(df),
+        "measured": True,
         "runs": int(np.isfinite(runs).sum()),
         "repeats_median": float(np.nanmedian(runs)) if np.isfinite(runs).any() else math.nan,
         "repeats_max": float(np.nanmax(runs)) if np.isfinite(runs).any() else math.nan,
@@ -448,7 +457,7 @@ def findings(
     - ``fair``: ``_fair_race``: per N our active set against the fastest other solver to Table
       1's digits, from the same (cascade) warm start and cold against cold.
     - ``protocol``: what the timing protocol did (``_protocol``); ratios and rankings use
-      ``rank_key`` (reference units when measured).
+      ``rank_key`` (CPU seconds).
     - ``load``/``span_s``/``job_time_s``/``concurrent_jobs``/``counts``: the load average at the
       measurements, the wall-clock span of the measurement jobs, their summed run time, the most
       of them that ran at once, and the status counts.

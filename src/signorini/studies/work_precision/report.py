@@ -19,8 +19,8 @@ TIME_PROTOCOL = (
 )
 TIME_OLD = "wall time of one solver call (cvxpy's canonicalisation included), best of 3 when under 1 s"
 UNITS = {
-    "time_ref": "Ratios in reference units (see the timing protocol), times in CPU seconds.",
-    "time_s": "Ratios and times: wall seconds (measured before the timing protocol).",
+    True: "Ratios and times in CPU seconds (see the timing protocol).",
+    False: "Ratios and times: wall seconds (measured before the timing protocol).",
 }
 HEADER = """\
 # Work-precision study: error against run time of every solver
@@ -51,18 +51,20 @@ PROTOCOL = (
     "{spread_median:.1%}); a call shorter than {min_sample_s:g} s is run often enough per sample to last that long "
     "(up to {calls_max:.0f} calls). Every call is timed "
     "by its CPU time, which time sharing with other processes does not inflate (the median CPU share of the calls "
-    "was {cpu_share_median:.2f}), and in *reference units*: over the CPU time of a fixed sparse kernel on the same "
-    "matrix (a Cholesky factorisation and CSR products) timed immediately before and after it, which cancels a "
-    "slowdown of the whole machine (caches, memory bandwidth, clock). A call under a load above {max_load} or with a "
-    "CPU share below {min_cpu_share:g} was rejected and redone after a wait for the load to fall ({rejected} calls); "
-    "{loaded} runs "
-    "kept a call under such a load after the last retry. Rankings and ratios below are in reference units, times "
-    "in CPU seconds; the CSV also has the wall times (`wall_s`) and the loads of every run."
+    "was {cpu_share_median:.2f}), and in *reference units* (`time_ref` in the CSV): over the CPU time of a fixed "
+    "sparse kernel on the same matrix (a Cholesky factorisation and CSR products) timed immediately before and "
+    "after it. A call under a load above {max_load} or with a CPU share below {min_cpu_share:g} was rejected and "
+    "redone after a wait for the load to fall ({rejected} calls); {loaded} runs kept a call under such a load "
+    "after the last retry. Rankings and ratios below are in CPU seconds: on this machine the kernel's time varies "
+    "from sample to sample about as much as a call's, so reference units add that noise, and between a quiet run "
+    "and one beside busy processes the ratios of CPU times moved less than those of reference units "
+    "(`docs/evidence/timing_robustness*.json`). The CSV also has the wall times (`wall_s`) and the loads of every "
+    "run."
 )
 KERNEL_SPREAD = (
-    " The kernel's own CPU time (the median of a job's kernels) differed between the jobs of one mesh by up to "
-    "{kernel_spread:.0%}: a ratio between two jobs in reference units carries that much uncertainty from the "
-    "kernel alone."
+    " The kernel's CPU time (the median of a job's kernels) differed between the jobs of one mesh by up to "
+    "{kernel_spread:.0%}: the machine's speed changed between those jobs by at most about that much, the kernel's "
+    "own noise included."
 )
 PROTOCOL_OLD = (
     "- **Timing.** This table predates the timing protocol: wall times, best of 3 when under 1 s, at the load above; "
@@ -247,7 +249,7 @@ def _fair_table(found: Mapping, labels: Mapping[str, str]) -> list[str]:
         "Our active set against the fastest other solver whose total errors print like the exact ones (status ok), "
         "from the same warm start and cold against cold: the cascade start is the interpolated solution of the "
         "coarser mesh N/4 (none below N = 96, where the cascade solves cold); cvxpy's QP solvers take no initial "
-        "guess and run cold only. " + UNITS[found.get("protocol", {}).get("key", "time_s")]
+        "guess and run cold only. " + UNITS[bool(found.get("protocol", {}).get("measured", False))]
     )
     return ["## Same warm start, and cold against cold", "", intro, "", md_table(header, rows)]
 
