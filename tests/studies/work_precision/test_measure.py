@@ -337,11 +337,13 @@ def test_figure_draws_the_fastest_configuration_per_family_with_the_legend_below
             _race_row(N, "ours", "cascade", "exact", 1.0, 2.0),
             _race_row(N, "ours_cold", "cold", "exact", 4.0, 8.0),
             _race_row(N, "ours_superlu", "cascade", "exact", 2.0, 4.0),
+            _race_row(N, "ours_mg", "cascade", "exact", 2.0, 4.0, solver="multigrid"),
         ]
         for k in range(4):  # four TAO methods: the one with the fewest CPU seconds is drawn
             rows.append(_race_row(N, f"tao{k}", "cold", "1e-08", 4.0 - k, 9.0 + k))
-        for k in range(5):  # five QP solvers, one family each
+        for k in range(4):  # four QP solvers, one family each
             rows.append(_race_row(N, f"qp{k}", "cold", "1e-08", 1.0, 20.0, solver=f"QP{k}"))
+        rows.append({**_race_row(N, "broken", "cold", "1e-08", 1.0, 1.0, solver="QPX"), "status": "failed"})
     df = pd.DataFrame(rows)
     df["W14"] = 0.0
     for kind in ("alg", "total", "disc"):
@@ -349,8 +351,10 @@ def test_figure_draws_the_fastest_configuration_per_family_with_the_legend_below
     df["alg_L4"] = df["alg_W14"] = 1e-9
     series = wpfig.figure_series(df, ["L4"])
     assert len(series) == wpfig.MAX_SERIES == 8
-    assert series[:2] == ["ours", "ours_cold"] and "ours_superlu" not in series  # beyond 8: one exact per start
+    # beyond 8: one exact configuration per route and start (a backend variant goes, another route stays)
+    assert series[:3] == ["ours", "ours_cold", "ours_mg"] and "ours_superlu" not in series
     assert "tao3" in series and not {"tao0", "tao1", "tao2"} & set(series)
+    assert "broken" not in series  # a family without one ok run
     fig = wpfig.work_precision_figure(df, [101, 201])
     colours = {line.get_color() for ax in fig.axes for line in ax.get_lines() if line.get_marker() not in ("", "None")}
     assert colours <= set(wpfig.OKABE_ITO)

@@ -34,10 +34,12 @@ def family(solver: str) -> str:
 
 def figure_series(df, table1_norms: Sequence[str] | None = None) -> list[str]:
     """The configurations drawn: every exact one, and per other solver family the fastest
-    configuration (CPU seconds) to Table 1's digits on the finest mesh (none
-    keeps them: the family's fastest run of status ok there; its first configuration otherwise).
-    Beyond ``MAX_SERIES`` (the palette), only the first exact configuration of each start
-    (cascade, cold) stays (a backend variant goes; its runs are in the CSV and the report)."""
+    configuration (CPU seconds) to Table 1's digits on the finest mesh (none keeps them: the
+    family's fastest run of status ok there; its first configuration otherwise).  A family none
+    of whose runs is ``ok`` is left out: its failures are in the report.  Beyond ``MAX_SERIES``
+    (the palette), only the first exact configuration of each route and start stays (a backend
+    variant goes, another route such as multigrid stays), and if that is still too many, of each
+    start; their runs are in the CSV and the report."""
     from signorini.published import TABLE1_NORMS
     from signorini.studies.work_precision.findings import fastest_to_digits, rank_key
 
@@ -51,6 +53,8 @@ def figure_series(df, table1_norms: Sequence[str] | None = None) -> list[str]:
     others = df[~df["config"].isin(exact)]
     for fam in dict.fromkeys(family(str(s)) for s in others["solver"]):
         members = list(dict.fromkeys(others.loc[others["solver"].astype(str).map(family) == fam, "config"]))
+        if not (others.loc[others["config"].isin(members), "status"] == "ok").any():
+            continue  # nothing but failures and skips: in the report, not on the axes
         candidates = {c: v["rank"] for c, v in keeps.items() if c in members}
         if not candidates:
             ok = last[last["config"].isin(members)]
@@ -60,8 +64,11 @@ def figure_series(df, table1_norms: Sequence[str] | None = None) -> list[str]:
         from signorini.studies.work_precision.findings import starts
 
         start = dict(zip(df["config"], starts(df), strict=True))
-        first = {start[c]: c for c in reversed(exact)}
-        chosen = [c for c in chosen if c not in exact or first.get(start[c]) == c]
+        solver = dict(zip(df["config"], df["solver"].astype(str), strict=True))
+        for group in (lambda c: (solver[c], start[c]), lambda c: start[c]):  # by route and start, then by start
+            if len(chosen) > MAX_SERIES:
+                first = {group(c): c for c in reversed(exact)}
+                chosen = [c for c in chosen if c not in exact or first.get(group(c)) == c]
     return chosen
 
 

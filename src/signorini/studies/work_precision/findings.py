@@ -101,8 +101,9 @@ def rank_key(df: pd.DataFrame) -> str:
     """The column that ranks run times: ``time_s``, CPU seconds under the timing protocol (wall
     seconds in tables measured before it).  Not the reference units ``time_ref``: on this machine
     the reference kernel's time varies from sample to sample about as much as a call's, even
-    within one round-robin, so dividing by it adds that noise; between a quiet run and one beside
-    busy processes the CPU-time ratios moved less (``docs/evidence/timing_robustness*.json``)."""
+    within one round-robin, so dividing by it adds that noise; beside CPU-bound processes the
+    CPU-time ratios moved less, beside memory-streaming ones about as much
+    (``docs/evidence/timing_robustness*.json``)."""
     return "time_s"
 
 
