@@ -123,6 +123,14 @@ TEST_SCENES = {
         "problem": PROBLEM,
         "norm_jobs": "per_mesh",  # as shipped: the convention norms of a mesh in one job
     },
+    "fine": {  # Table 2 continued (shipped: N = 501 ... 4001)
+        "N": [9, 17],
+        "norms": ["L4", "L16", "Linf", "W14", "W116", "W1inf", "H12", "L4_true", "L16_true", "Linf_true", "W14_true",
+                  "W116_true", "W1inf_true", "H12_true"],
+        "solver": "active_set",
+        "problem": PROBLEM,
+        "norm_jobs": "per_mesh",
+    },
     "work_precision": {
         "N": [11, 21],
         "norms": ["L4", "W14"],
@@ -193,6 +201,7 @@ BUILT_TARGETS = (
     "results/mine/eoc.csv",
     "results/case2/eoc.csv",
     "true_norms",
+    "fine",
 )
 
 

@@ -25,6 +25,7 @@ CATEGORIES = {
     "work_precision": "Work precision",
     "stability": "Stability",
     "true_norms": "Paper",
+    "fine": "Theory",
 }
 
 

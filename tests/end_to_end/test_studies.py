@@ -108,3 +108,20 @@ def test_true_norms_target_renders_every_norm_of_table_2(built_repo):
     t2 = pd.read_csv(built_repo / "paper_figures/table2_true.csv")
     assert list(t2.columns) == ["h", *(true_name(n) for n in TABLE2_NORMS)]
     assert "## Gap per norm" in (built_repo / "paper_figures/table1_true.md").read_text()
+
+
+def test_fine_target_continues_table_2_on_its_own_scene(built_repo):
+    """`fine` renders the scene fine's meshes (N = 9, 17 in the test workflow), not the paper's,
+    and names its own command and errors table."""
+    import pandas as pd
+
+    from signorini.published import TABLE2_NORMS
+
+    t1 = pd.read_csv(built_repo / "paper_figures/table1_fine.csv")
+    assert list(t1["norm"]) == list(TABLE2_NORMS) * 2 and list(t1["h"].unique()) == ["1/9", "1/17"]
+    assert (t1["quadrature_error"] <= RTOL * t1["true"]).all()
+    t2 = pd.read_csv(built_repo / "paper_figures/table2_fine.csv")
+    assert list(t2.columns) == ["h", *(true_name(n) for n in TABLE2_NORMS)]
+    assert list(t2["h"]) == ["1/17", "regr.", "theo."]
+    md = (built_repo / "paper_figures/table2_fine.md").read_text()
+    assert "snakemake -c2 fine" in md and "`table1_fine.md`" in md and "true_norms" not in md

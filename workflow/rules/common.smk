@@ -102,6 +102,7 @@ FIG = config["figures_scene"]  # the scene paper_figures/ is rendered from
 # slurm profile's `groups` (group names of the command line are not known while parsing)
 MESH_GROUP = "mesh"
 THEORY = "theory"  # the scene rendered into paper_figures/theory*
+FINE = "fine"  # the scene rendered into paper_figures/table{1,2}_fine.*
 WP = "work_precision"  # the scene rendered into paper_figures/work_precision*, cost_of_accuracy*
 STAB = "stability"  # the scene rendered into paper_figures/stability.*
 
@@ -185,10 +186,11 @@ def norm_jsons(scene, norms):
     }
 
 
-def true_table_norms():
-    """{norm: artifacts} of the rendered scene for every Table 2 norm and its true variant."""
+def true_table_norms(scene=FIG):
+    """{norm: artifacts} of ``scene`` (the rendered one) for every Table 2 norm and its true
+    variant."""
     names = [n for base in TABLE2_NORMS for n in (base, true_name(base))]
-    return norm_jsons(FIG, names)
+    return norm_jsons(scene, names)
 
 
 def theory_true_norms():

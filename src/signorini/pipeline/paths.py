@@ -82,6 +82,10 @@ FIGURES = {
         **{f"table1_{k}": v for k, v in _outputs("table1_true", "csv", "md").items()},
         **{f"table2_{k}": v for k, v in _outputs("table2_true", "csv", "md").items()},
     },
+    "fine_tables": {
+        **{f"table1_{k}": v for k, v in _outputs("table1_fine", "csv", "md").items()},
+        **{f"table2_{k}": v for k, v in _outputs("table2_fine", "csv", "md").items()},
+    },
 }
 
 
@@ -110,6 +114,7 @@ TARGETS = {
     "work_precision": ("work_precision_table", "work_precision_figures", "work_precision_report"),
     "stability": ("stability_atlas",),
     "true_norms": ("true_tables",),
+    "fine": ("fine_tables",),
 }
 
 
@@ -129,6 +134,8 @@ REPORT_PAGES = {
     "reproduction": FIGURES["reproduction"]["md"],
     "table1_true": FIGURES["true_tables"]["table1_md"],
     "table2_true": FIGURES["true_tables"]["table2_md"],
+    "table1_fine": FIGURES["fine_tables"]["table1_md"],
+    "table2_fine": FIGURES["fine_tables"]["table2_md"],
     "theory": FIGURES["theory_report"]["md"],
     "work_precision": FIGURES["work_precision_report"]["md"],
     "stability": FIGURES["stability_atlas"]["md"],

@@ -29,6 +29,7 @@ from signorini.pipeline import paths
 STUDIES = {
     "all": ("paper (Tables 1-2, Figures 2-3)", "make all"),
     "true_norms": ("true norms", "snakemake -c2 true_norms"),
+    "fine": ("Table 2 to h = 1/4001", "snakemake -c2 fine"),
     "theory": ("theory scene", "snakemake -c2 theory"),
     "work_precision": ("work-precision study", "snakemake -c2 work_precision"),
     "stability": ("stability atlas", "snakemake -c2 stability"),
@@ -142,9 +143,10 @@ def _evidence(target: str, config: Mapping) -> list[str]:
     scenes, fig = config["scenes"], config.get("figures_scene", "paper")
     if target == "all":
         return [paths.PATHS[k].format(scene=fig) for k in ("errors_csv", "eoc_csv")]
-    if target == "true_norms":
-        return [paths.PATHS["norm_json"].format(scene=fig, N=N, norm=true_name(n))
-                for N in scenes[fig]["N"] for n in TABLE2_NORMS]
+    if target in ("true_norms", "fine"):
+        scene = fig if target == "true_norms" else "fine"
+        return [paths.PATHS["norm_json"].format(scene=scene, N=N, norm=true_name(n))
+                for N in scenes[scene]["N"] for n in TABLE2_NORMS]
     if target == "theory":
         return [paths.PATHS["errors_csv"].format(scene="theory"),
                 *(paths.PATHS["theory_json"].format(scene="theory", N=N) for N in scenes["theory"]["N"])]
