@@ -12,6 +12,8 @@ REPORT_PAGES = {
     "reproduction": ("reproduction", "Paper", "Reproduction"),
     "table1_true": ("true_tables", "Paper", "True norms"),
     "table2_true": ("true_tables", "Paper", "True norms"),
+    "table1_fine": ("fine_tables", "Theory", "Finer meshes"),
+    "table2_fine": ("fine_tables", "Theory", "Finer meshes"),
     "theory": ("theory", "Theory", None),
     "work_precision": ("work_precision", "Work precision", None),
     "stability": ("stability", "Stability", None),
