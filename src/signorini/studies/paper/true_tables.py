@@ -43,12 +43,19 @@ class TrueTablesTarget:
     """What the two tables' text names: the target that renders them, the errors table the EOCs
     are of, and where the conventions' values and EOCs come from."""
 
-    name: str = "true_norms"
-    errors_md: str = "table1_true.md"
-    convention_values: str = "the values of `table1.csv`"
-    conventions: str = "`table2.csv`"
+    name: str
+    errors_md: str
+    convention_values: str
+    conventions: str
 
 
+# the paper scene's meshes, beside the paper's tables
+TRUE_NORMS_TARGET = TrueTablesTarget(
+    name="true_norms",
+    errors_md="table1_true.md",
+    convention_values="the values of `table1.csv`",
+    conventions="`table2.csv`",
+)
 # Table 2 continued: the scene `fine`'s meshes, its own convention norms
 FINE_TARGET = TrueTablesTarget(
     name="fine",
@@ -92,10 +99,9 @@ def true_rows(frame, paper: Mapping) -> list[dict]:
 
 
 def table1_true_md(
-    rows: list[dict], norms: Sequence[str], rtol: float, paper_table1: str, target: TrueTablesTarget | None = None
+    rows: list[dict], norms: Sequence[str], rtol: float, paper_table1: str, target: TrueTablesTarget = TRUE_NORMS_TARGET
 ) -> str:
     """The Markdown report: the gap per norm (ranges over the meshes), then every cell."""
-    target = target or TrueTablesTarget()
     summary = []
     for norm in norms:
         sub = [r for r in rows if r["norm"] == norm]
@@ -162,9 +168,8 @@ def table2_true_md(
     true: Mapping,
     norms: Sequence[str],
     rtol: float,
-    target: TrueTablesTarget | None = None,
+    target: TrueTablesTarget = TRUE_NORMS_TARGET,
 ) -> str:
-    target = target or TrueTablesTarget()
     labels, rows = eoc_rows(N, {n: true[n] for n in norms})
     theo = [THEORETICAL_ORDERS.get(n) for n in norms]
     md_rows = [[lab, *(f"{v:.4f}" for v in row)] for lab, row in zip(labels, rows, strict=True)]
@@ -198,12 +203,11 @@ def true_tables_stage(
     norm_jsons: Mapping[str, Sequence[str]],
     paper_table1: str | os.PathLike,
     outs: Mapping[str, str | os.PathLike],
-    target: TrueTablesTarget | None = None,
+    target: TrueTablesTarget = TRUE_NORMS_TARGET,
 ) -> None:
     """Stage ``true_tables`` (and ``fine_tables``, with its ``target``): ``norm_jsons`` holds, per
     norm of Table 2, the convention artifacts under its name and the true artifacts under
     ``<name>_true``."""
-    target = target or TrueTablesTarget()
     from signorini.studies.scene.store import read_norm, read_quadrature_error
 
     Ns = [int(n) for n in scene_N]

@@ -41,14 +41,13 @@ def figure_series(df, table1_norms: Sequence[str] | None = None) -> list[str]:
     variant goes, another route such as multigrid stays), and if that is still too many, of each
     start; their runs are in the CSV and the report."""
     from signorini.published import TABLE1_NORMS
-    from signorini.studies.work_precision.findings import fastest_to_digits, rank_key
+    from signorini.studies.work_precision.findings import RANK_KEY, fastest_to_digits
 
     exact = list(dict.fromkeys(df.loc[df["tol_label"] == "exact", "config"]))
     finest = int(df["N"].max())
     norms = [n for n in (table1_norms or TABLE1_NORMS) if f"total_{n}" in df.columns]
     keeps = fastest_to_digits(df, finest, norms)
     last = df[(df["N"] == finest) & (df["status"] == "ok")]
-    key = rank_key(df)
     chosen = list(exact)
     others = df[~df["config"].isin(exact)]
     for fam in dict.fromkeys(family(str(s)) for s in others["solver"]):
@@ -58,7 +57,7 @@ def figure_series(df, table1_norms: Sequence[str] | None = None) -> list[str]:
         candidates = {c: v["rank"] for c, v in keeps.items() if c in members}
         if not candidates:
             ok = last[last["config"].isin(members)]
-            candidates = ok.groupby("config")[key].min().to_dict() if not ok.empty else {members[0]: 0.0}
+            candidates = ok.groupby("config")[RANK_KEY].min().to_dict() if not ok.empty else {members[0]: 0.0}
         chosen.append(min(candidates, key=candidates.get))
     if len(chosen) > MAX_SERIES:
         from signorini.studies.work_precision.findings import starts

@@ -92,19 +92,18 @@ def _needed(cells: Sequence[Mapping]) -> dict[str, str | None]:
     return needed
 
 
+# The column that ranks run times and forms their ratios: ``time_s``, CPU seconds under the timing
+# protocol (wall seconds in tables measured before it).  Not the reference units ``time_ref``: on
+# this machine the reference kernel's time varies from sample to sample about as much as a call's,
+# even within one round-robin, so dividing by it adds that noise; beside CPU-bound processes the
+# CPU-time ratios moved less, beside memory-streaming ones about as much
+# (``docs/evidence/timing_robustness*.json``).
+RANK_KEY = "time_s"
+
+
 def measured_under_protocol(df: pd.DataFrame) -> bool:
     """Whether the table was measured under the timing protocol (it has reference units)."""
     return "time_ref" in df.columns and bool(np.isfinite(df["time_ref"].to_numpy(dtype=float)).any())
-
-
-def rank_key(df: pd.DataFrame) -> str:
-    """The column that ranks run times: ``time_s``, CPU seconds under the timing protocol (wall
-    seconds in tables measured before it).  Not the reference units ``time_ref``: on this machine
-    the reference kernel's time varies from sample to sample about as much as a call's, even
-    within one round-robin, so dividing by it adds that noise; beside CPU-bound processes the
-    CPU-time ratios moved less, beside memory-streaming ones about as much
-    (``docs/evidence/timing_robustness*.json``)."""
-    return "time_s"
 
 
 def starts(df: pd.DataFrame) -> pd.Series:
@@ -120,9 +119,9 @@ def starts(df: pd.DataFrame) -> pd.Series:
 
 
 def _cheapest(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> dict[int, dict[str, dict]]:
-    """Per N and config, the fastest run (by ``rank_key``) that leaves Table 1's row of that N
+    """Per N and config, the fastest run (by ``RANK_KEY``) that leaves Table 1's row of that N
     unchanged: its tolerance, its seconds and the value it is ranked by."""
-    key = rank_key(df)
+    key = RANK_KEY
     cheapest: dict[int, dict[str, dict]] = {}
     for N in Ns:
         cheapest[N] = {}
@@ -308,7 +307,7 @@ def _fair_race(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> dict[s
     digits (status ok): ``same_warm_start`` — ours from the cascade against the solvers
     started from the cascade's interpolated coarse solution (the start's cost included) — and
     ``cold_against_cold`` — ours from the cold start against the others from u = 0.  Ratios
-    (other / ours) by ``rank_key``; empty without the runs of a side."""
+    (other / ours) by ``RANK_KEY``; empty without the runs of a side."""
     start = starts(df)
     exact = df["tol_label"] == EXACT_LABEL
     cheapest = _cheapest(df[df["status"] == "ok"], Ns, t1)
@@ -360,18 +359,17 @@ def kernel_spread(df: pd.DataFrame) -> float:
 
 def _protocol(df: pd.DataFrame) -> dict[str, Any]:
     """What the timing protocol did (tables measured under it): repeats per run, spread, samples
-    rejected and redone, runs accepted under load after the last retry, CPU share, the time key,
-    whether the table was measured under the protocol at all."""
+    rejected and redone, runs accepted under load after the last retry, CPU share, whether the
+    table was measured under the protocol at all."""
     timed = df[df["status"] != "skipped"]
     if not measured_under_protocol(df) or timed.empty:
-        return {"key": rank_key(df), "measured": False}
+        return {"measured": False}
 
     def col(name: str) -> np.ndarray:
         return pd_numeric(timed, name)
 
     runs, spread, share, calls = col("time_runs"), col("spread"), col("cpu_share"), col("calls")
     return {
-        "key": rank_key(df),
         "measured": True,
         "runs": int(np.isfinite(runs).sum()),
         "repeats_median": float(np.nanmedian(runs)) if np.isfinite(runs).any() else math.nan,
@@ -458,7 +456,7 @@ def findings(
     - ``fair``: ``_fair_race``: per N our active set against the fastest other solver to Table
       1's digits, from the same (cascade) warm start and cold against cold.
     - ``protocol``: what the timing protocol did (``_protocol``); ratios and rankings use
-      ``rank_key`` (CPU seconds).
+      ``RANK_KEY`` (CPU seconds).
     - ``load``/``span_s``/``job_time_s``/``concurrent_jobs``/``counts``: the load average at the
       measurements, the wall-clock span of the measurement jobs, their summed run time, the most
       of them that ran at once, and the status counts.
