@@ -41,7 +41,6 @@ from signorini.pipeline.jobenv import single_threaded
 single_threaded()  # one thread: CPU time = one core (before numpy loads its BLAS)
 
 import numpy as np  # noqa: E402
-import yaml  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 GOAL = 0.15
@@ -90,9 +89,11 @@ class Busy:
 
 
 def shipped_study() -> dict:
-    """The ``study`` block of the shipped work-precision scene."""
-    scenes = yaml.safe_load((ROOT / "workflow/config.yaml").read_text(encoding="utf-8"))["scenes"]
-    return scenes["work_precision"]["study"]
+    """The ``study`` block of the shipped work-precision scene (the config loaded and checked as
+    the workflow does)."""
+    from signorini.pipeline.config import load_config
+
+    return load_config(ROOT / "workflow/config.yaml")["scenes"]["work_precision"]["study"]
 
 
 def configs(names: list[str]):
