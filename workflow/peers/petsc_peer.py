@@ -274,6 +274,15 @@ def initial_guess(path: str | None, lb, ub) -> np.ndarray | None:
     return np.minimum(np.maximum(u, lb.getArray()), ub.getArray())
 
 
+def os_threads() -> int | None:
+    """The threads this process has now (Linux), MPI's progress threads and any OpenMP pool a
+    solve started included: a solve that should run on one core shows whether it did."""
+    try:
+        return len(os.listdir("/proc/self/task"))
+    except OSError:
+        return None
+
+
 def solve_once(PETSc, system: str, kind: str, start: str | None = None) -> dict:
     """One solve from u = 0 (or from the initial guess in ``start``) with fresh objects: setup
     and solve times, reason, iterations, u."""
@@ -293,6 +302,7 @@ def solve_once(PETSc, system: str, kind: str, start: str | None = None) -> dict:
     t2, c2 = time.perf_counter(), time.process_time()
     code = int(solver.getConvergedReason())
     out = {
+        "threads": os_threads(),
         "setup_s": t1 - t0,
         "solve_s": t2 - t1,
         "solve_cpu_s": c2 - c1,

@@ -15,8 +15,17 @@ import os
 from collections.abc import MutableMapping
 
 # RAYON: the thread pool of Clarabel's sparse factorisation (faer); without it a Clarabel call
-# ran 1.16 cores wide and 37 % slower in wall time at N = 201 on 2 cores
-THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "RAYON_NUM_THREADS")
+# ran 1.16 cores wide and 37 % slower in wall time at N = 201 on 2 cores.
+# OMP_THREAD_LIMIT: CHOLMOD's supernodal factorisation (Debian's, under the PETSc peers) asks for
+# 4 OpenMP threads whatever OMP_NUM_THREADS says; on 2 cores vinewtonrsls + CHOLMOD then took
+# 2.3-3.1 s of CPU at N = 201 (a quarter of it system time, 67 000 thread hand-overs), one thread 1.47 s
+THREAD_VARIABLES = (
+    "OMP_NUM_THREADS",
+    "OMP_THREAD_LIMIT",
+    "OPENBLAS_NUM_THREADS",
+    "MKL_NUM_THREADS",
+    "RAYON_NUM_THREADS",
+)
 
 
 def single_threaded(environ: MutableMapping[str, str] | None = None) -> MutableMapping[str, str]:

@@ -10,7 +10,9 @@ The smoke tests need petsc4py under the peer interpreter (``/usr/bin/python3``; 
 from __future__ import annotations
 
 import importlib.util
+import json
 import os
+import subprocess
 import sys
 from pathlib import Path
 
@@ -268,3 +270,24 @@ def test_peer_from_an_initial_guess(tmp_path, petsc_probe, name):
     assert warm.result.iterations <= 1 < cold.result.iterations
     assert warm.extra["peer"]["start"] != "cold" and cold.extra["peer"]["start"] == "cold"
     assert warm.extra["timing"]["time_runs"] >= 1 and warm.extra["timing"]["cpu_share"] > 0
+
+
+@pytest.mark.peers
+def test_a_peer_factorisation_runs_on_one_thread(tmp_path, petsc_probe):
+    """CHOLMOD's supernodal factorisation asks for an OpenMP pool of its own whatever the BLAS
+    thread variables say; in the study's environment (``peers._env``) the driver's process ends
+    its solve with as many threads as one whose factorisation was never threaded (TRON with
+    BoomerAMG), and without that environment's limits with more."""
+    inputs = _system(tmp_path, 61)  # at N = 41 CHOLMOD's supernodes are too small to thread
+    configs, answers = shipped_peers(), {}
+    for name, env in [("petsc_rsls_cholmod", peers._env()), ("petsc_tron_boomeramg", peers._env()),
+                      ("unlimited", {k: v for k, v in os.environ.items() if not k.startswith("OMP_")})]:
+        config = configs["petsc_rsls_cholmod" if name == "unlimited" else name]
+        request = {"kind": peers.PEER_SOLVERS[config.solver], "options": dict(config.options), "tol": 1e-8}
+        (tmp_path / "request.json").write_text(json.dumps(request), encoding="utf-8")
+        out = tmp_path / name
+        subprocess.run([TEST_PEER_PYTHON, str(DRIVER), "solve", str(inputs["system"]), str(tmp_path / "request.json"),
+                        str(out)], env=env, check=True, capture_output=True)
+        answers[name] = json.loads((out / "result.json").read_text(encoding="utf-8"))
+    assert answers["petsc_rsls_cholmod"]["threads"] == answers["petsc_tron_boomeramg"]["threads"]
+    assert answers["unlimited"]["threads"] > answers["petsc_rsls_cholmod"]["threads"]

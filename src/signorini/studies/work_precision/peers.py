@@ -30,6 +30,8 @@ from signorini.studies.work_precision.study import PEER_PYTHON, PEER_SOLVERS, So
 DEFAULT_TOL = 1e-8  # PETSc's default snes_rtol and tao_gatol/grtol: what a default run must reach
 PROBE_TIMEOUT_S = 120.0
 START_SLACK_S = 60.0  # interpreter start, import and matrix set-up on top of the solve's time limit
+# what a record keeps of the driver's answer; threads: the process's OS threads after the solve
+PEER_FIELDS = ("petsc_version", "options", "effective", "python", "setup_times", "start", "threads")
 
 
 @dataclass
@@ -194,7 +196,7 @@ def outcome(config: SolverConfig, disc, tol: float | None, answer: dict, u) -> P
         "setup_s": float(answer["setup_s"]) if "setup_s" in answer else float("nan"),
         "converged_reason": str(answer.get("converged_reason", "")),
         "peer_info": peer_info(answer),
-        "peer": {k: answer.get(k) for k in ("petsc_version", "options", "effective", "python", "setup_times", "start")},
+        "peer": {k: answer.get(k) for k in PEER_FIELDS},
     }
     if answer.get("status") == "unavailable":
         return PeerOutcome(None, "skipped", str(answer["reason"]), [], extra)
