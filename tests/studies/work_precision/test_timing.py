@@ -117,11 +117,29 @@ def test_repeats_stop_at_the_cap_and_at_the_budget():
 
     measured = timing.Timer(FAST, m).measure(call, FakeKernel(m))
     assert len(measured.samples) == FAST.max_repeats and measured.stop == "max_repeats"
-    assert measured.summary(FAST, 2)["spread"] == pytest.approx(1.0)  # reference units 1, 2, 1, 2, 1
+    assert measured.summary(FAST, 2)["spread"] == pytest.approx(1.0)  # CPU times .1 .2 .1 .2 .1
     m = FakeMachine()
     long = timing.Protocol(budget_s=1.0)
     measured = timing.Timer(long, m).measure(solver(m, 3.0), FakeKernel(m))
     assert len(measured.samples) == 1 and measured.stop == "budget"
+
+
+def test_the_repeats_stop_when_the_cpu_times_agree_whatever_the_kernel_does():
+    """The spread that stops the repeats is that of the CPU times the study ranks by: a call of
+    constant cost stops after ``min_repeats`` samples though the kernel beside it, and with it
+    the reference units, changes from sample to sample."""
+    m = FakeMachine()
+    kernel_work = iter([0.1, 0.1, 0.3, 0.3] * 10)  # means around the samples .1 .2 .3
+
+    class NoisyKernel(FakeKernel):
+        def run(self):
+            w0, c0 = self.machine.wall(), self.machine.cpu()
+            self.machine.work(next(kernel_work))
+            return self.machine.wall() - w0, self.machine.cpu() - c0
+
+    measured = timing.Timer(FAST, m).measure(solver(m, 0.2), NoisyKernel(m))
+    assert measured.stop == "spread" and len(measured.samples) == FAST.min_repeats
+    assert timing.spread([s.ref_units for s in measured.samples]) > FAST.spread
 
 
 def test_a_failed_answer_stops_and_an_exception_is_carried():

@@ -46,7 +46,7 @@ LOAD = (
 )
 PROTOCOL = (
     "- **Timing protocol** (`signorini.studies.work_precision.timing`). Each run's time is the median of repeated "
-    "samples (at least {min_repeats} that agree within {spread:.0%} in reference units, at most {max_repeats}, no new "
+    "samples (at least {min_repeats} whose CPU times agree within {spread:.0%}, at most {max_repeats}, no new "
     "sample after {budget_s:g} s; here {repeats_median:.0f} per run, at most {repeats_max:.0f}; median spread "
     "{spread_median:.1%}); a call shorter than {min_sample_s:g} s is run often enough per sample to last that long "
     "(up to {calls_max:.0f} calls). Every call is timed "

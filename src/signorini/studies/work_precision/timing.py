@@ -23,12 +23,12 @@ What inflates a solver's wall time on a shared machine, and what this protocol d
    ``calls`` times in a row per later sample (as ``timeit`` does), enough to last
    ``min_sample_s``; the sample's times are per call, so a call of milliseconds is not timed
    near the clocks' resolution.  It does not remove the variation of the CPU time itself from
-   one second to the next: on a quiet machine the batches of a 0.3 s call (N = 201) still spread
-   by about 28 %, as its single calls did (``docs/evidence/timing_robustness*.json``).
+   one second to the next: on a quiet machine the batches of 0.1-0.5 s calls (N = 201) still
+   spread by 10-17 % over 7 samples (``docs/evidence/timing_robustness*.json``).
 5. **Noise**: a measurement is repeated until ``min_repeats`` samples agree within ``spread``
-   (relative range of their reference-unit times), at most ``max_repeats`` times and no new
-   sample after ``budget_s`` seconds (a call longer than that is timed once: it averages the
-   load over its own duration).  The reported value is the median.
+   (relative range of their CPU times, the quantity the study ranks by), at most
+   ``max_repeats`` times and no new sample after ``budget_s`` seconds (a call longer than that
+   is timed once: it averages the load over its own duration).  The reported value is the median.
 
 Round-robin scheduling (``round_robin``) interleaves the samples of several tasks, so that
 when the load changes slowly all tasks see it alike; it cannot help against load that changes
@@ -219,15 +219,16 @@ class Measurement:
         if not s:
             return {"time_runs": 0, "rejected": len(self.rejected), "time_stop": self.stop}
         units = [x.ref_units for x in s]
+        cpu = [x.cpu_s for x in s]
         limit = protocol.max_load if protocol.max_load is not None else float(cores)
         return {
-            "time_s": statistics.median(x.cpu_s for x in s),
+            "time_s": statistics.median(cpu),
             "wall_s": statistics.median(x.wall_s for x in s),
             "time_ref": statistics.median(units),
             "wall_ref": statistics.median(x.wall_ref_units for x in s),
             "ref_s": statistics.median(x.ref_cpu_s for x in s),
             "cpu_share": statistics.median(x.cpu_share for x in s),
-            "spread": spread(units),
+            "spread": spread(cpu),
             "time_runs": len(s),
             "rejected": len(self.rejected),
             "loaded": any(x.load > limit or x.cpu_share < protocol.min_cpu_share for x in s),
@@ -306,15 +307,6 @@ class Timer:
         s.rejected = self.rejection(s)
         return result, s, ref_after
 
-    def _done(self, samples: list[Sample], started: float) -> str:
-        p = self.protocol
-        if samples and self.machine.wall() - started >= p.budget_s:
-            return "budget"
-        if len(samples) >= p.max_repeats:
-            return "max_repeats"
-        if len(samples) >= p.min_repeats and spread([x.ref_units for x in samples[-p.min_repeats :]]) <= p.spread:
-            return "spread"
-        return ""
 
     def measure(self, call: Callable[[], Timed], kernel: ReferenceKernel, accept: Callable[[Any], bool] = bool):
         """Repeat ``call`` under the protocol; a result for which ``accept`` is false (a failed
@@ -337,7 +329,7 @@ class Timer:
                 rejected.append(s)
                 continue
             samples.append(s)
-            stop = "answer rejected" if not accept(result) else self._done(samples, started)
+            stop = "answer rejected" if not accept(result) else stop_reason(p, samples, m.wall() - started)
         return Measurement(samples, rejected, stop, result, self.waited_s - waited0)
 
 
@@ -384,16 +376,18 @@ def round_robin(timer: Timer, tasks: Sequence[Task], on_sample: Callable[[Task, 
                 queue.append(t)
                 continue
             t.samples.append(s)
-            t.stop = _task_stop(timer, t, budget[t.name]) if t.accept(t.result) else "answer rejected"
+            t.stop = stop_reason(p, t.samples, budget[t.name]) if t.accept(t.result) else "answer rejected"
 
 
-def _task_stop(timer: Timer, t: Task, used_s: float) -> str:
-    p = timer.protocol
-    if used_s >= p.budget_s:
+def stop_reason(p: Protocol, samples: Sequence[Sample], used_s: float) -> str:
+    """Why a measurement with these accepted ``samples``, ``used_s`` seconds into its budget,
+    stops ("" to go on): the budget, the cap, or its last ``min_repeats`` CPU times (the
+    quantity reported and ranked) agreeing within ``spread``."""
+    if samples and used_s >= p.budget_s:
         return "budget"
-    if len(t.samples) >= p.max_repeats:
+    if len(samples) >= p.max_repeats:
         return "max_repeats"
-    if len(t.samples) >= p.min_repeats and spread([x.ref_units for x in t.samples[-p.min_repeats :]]) <= p.spread:
+    if len(samples) >= p.min_repeats and spread([x.cpu_s for x in samples[-p.min_repeats :]]) <= p.spread:
         return "spread"
     return ""
 
