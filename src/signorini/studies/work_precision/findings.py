@@ -95,9 +95,8 @@ def _needed(cells: Sequence[Mapping]) -> dict[str, str | None]:
 # The column that ranks run times and forms their ratios: ``time_s``, CPU seconds under the timing
 # protocol (wall seconds in tables measured before it).  Not the reference units ``time_ref``: on
 # this machine the reference kernel's time varies from sample to sample about as much as a call's,
-# even within one round-robin, so dividing by it adds that noise; beside CPU-bound processes the
-# CPU-time ratios moved less, beside memory-streaming ones about as much
-# (``docs/evidence/timing_robustness*.json``).
+# even within one round-robin, so dividing by it adds that noise; beside busy processes it kept the
+# ratios no better than CPU times did (``docs/evidence/timing_robustness*.json``).
 RANK_KEY = "time_s"
 
 

@@ -56,9 +56,8 @@ PROTOCOL = (
     "after it. A call under a load above {max_load} or with a CPU share below {min_cpu_share:g} was rejected and "
     "redone after a wait for the load to fall ({rejected} calls); {loaded} runs kept a call under such a load "
     "after the last retry. Rankings and ratios below are in CPU seconds: on this machine the kernel's time varies "
-    "from sample to sample about as much as a call's, so reference units add that noise; beside busy processes "
-    "the ratios of CPU times moved less than those of reference units, beside memory-streaming ones about as much "
-    "(`docs/evidence/timing_robustness*.json`). The CSV also has the wall times (`wall_s`) and the loads of every "
+    "from sample to sample about as much as a call's, so reference units add that noise, and beside busy "
+    "processes they kept the ratios no better than CPU times did (`docs/evidence/timing_robustness*.json`). The CSV also has the wall times (`wall_s`) and the loads of every "
     "run."
 )
 KERNEL_SPREAD = (
