@@ -57,7 +57,8 @@ PROTOCOL = (
     "redone after a wait for the load to fall ({rejected} calls); {loaded} runs kept a call under such a load "
     "after the last retry. Rankings and ratios below are in CPU seconds: on this machine the kernel's time varies "
     "from sample to sample about as much as a call's, so reference units add that noise, and beside busy "
-    "processes they kept the ratios no better than CPU times did (`docs/evidence/timing_robustness*.json`). The CSV also has the wall times (`wall_s`) and the loads of every "
+    "processes they kept the ratios no better than CPU times did (`docs/evidence/timing_robustness*.json`). "
+    "The CSV also has the wall times (`wall_s`) and the loads of every "
     "run."
 )
 KERNEL_SPREAD = (
