@@ -44,3 +44,24 @@ def test_the_multigrid_correction_agrees_with_the_factorised_one(small_case):
     assert np.sqrt(error @ (A @ error)) <= 10 * ESTIMATE_RTOL * direct.energy
     assert multigrid.energy == pytest.approx(direct.energy, rel=10 * ESTIMATE_RTOL)
     assert np.all(multigrid.delta[res.active] == 0.0)
+
+
+def test_the_multigrid_correction_reuses_the_solvers_hierarchy(small_case, monkeypatch):
+    """With the multigrid route's ``SolveResult.hierarchy`` (Galerkin for the final set) the
+    estimate sets up no hierarchy of its own and agrees with the factorised correction."""
+    from signorini.solvers import algebraic_error, multigrid_solve
+    from signorini.solvers.algebraic_error import ESTIMATE_RTOL, linearised_error
+
+    disc, direct_result = small_case
+    A, b, B = disc.A, disc.b, disc.boundary
+    res = multigrid_solve(A, b, B, max_coarse=20)
+    assert res.hierarchy is not None and np.array_equal(~res.hierarchy.free[B], np.isin(B, res.active))
+    free = np.setdiff1d(np.arange(b.size), B)
+    delta = np.zeros_like(res.u)
+    delta[free] = 1e-6 * np.abs(res.u).max() * np.random.default_rng(8).uniform(-1.0, 1.0, free.size)
+    lam = res.lam + np.where(np.isin(B, res.active), (A @ delta)[B], 0.0)
+    direct = linearised_error(A, b, B, res.u + delta, lam, res.active, "active_set")
+    monkeypatch.setattr(algebraic_error, "GalerkinHierarchy", None)  # a second set-up would fail
+    reused = linearised_error(A, b, B, res.u + delta, lam, res.active, "multigrid", res.hierarchy)
+    error = reused.delta - direct.delta
+    assert np.sqrt(error @ (A @ error)) <= 10 * ESTIMATE_RTOL * direct.energy

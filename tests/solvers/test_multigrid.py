@@ -10,12 +10,12 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from signorini.fem.assembly import p1_basis, system_matrix
-from signorini.fem.discrete import build
+from signorini.fem.discrete import build, interpolate_fk
 from signorini.fem.mesh import boundary_nodes, friedrichs_keller
 from signorini.fem.problem import ConstantProblem, FullContactProblem, Problem
 from signorini.fem.solve import solve_discrete
 from signorini.solvers import KKTError, NotConvergedError, active_set_solve, multigrid_solve
-from signorini.solvers.multigrid import GalerkinHierarchy, pcg
+from signorini.solvers.multigrid import GalerkinHierarchy, coarse_lines, fk_grid, fk_transfer, hierarchy, pcg
 from signorini.solvers.pdas import clamped_values
 
 AGREEMENT = 1e-12  # max |u_multigrid - u_direct| / max |u_direct|
@@ -104,12 +104,13 @@ def test_semicoercive_problems():
         multigrid_solve(K, M @ np.ones(K.shape[0]), boundary_nodes(mesh), max_coarse=SMALL_COARSE)
 
 
-def test_galerkin_updates_keep_every_coarse_operator_exact(rng):
+@pytest.mark.parametrize("kind", ["geometric", "classical"])
+def test_galerkin_updates_keep_every_coarse_operator_exact(rng, kind):
     """After a sequence of free sets (few and many changes, both directions), every level's
     operator is the Galerkin product of the level above, recomputed from scratch."""
-    disc = build(Problem(), 40)
+    disc = build(Problem(), 41)
     A = sp.csr_matrix(disc.A)
-    H = GalerkinHierarchy(A, "classical", max_coarse=SMALL_COARSE)
+    H = GalerkinHierarchy(A, kind, max_coarse=SMALL_COARSE)
     rows = np.repeat(np.arange(A.shape[0]), np.diff(A.indptr))
     B = disc.boundary
     free = np.ones(A.shape[0], dtype=bool)
@@ -153,7 +154,7 @@ def test_bad_options_and_truncated_solves_raise_named_errors(cache):
     disc = cache.discrete({}, 21)
     A, b, B = disc.A, disc.b, disc.boundary
     with pytest.raises(ValueError, match="algebraic multigrid"):
-        multigrid_solve(A, b, B, amg="geometric")
+        multigrid_solve(A, b, B, amg="unknown")
     with pytest.raises(ValueError, match="inner_rtol"):
         multigrid_solve(A, b, B, tol=1e-6, inner_rtol=1e-8)
     with pytest.raises(NotConvergedError, match="conjugate gradients"):
@@ -190,3 +191,54 @@ def test_abs_product_is_the_product_with_the_absolute_matrix_bit_for_bit(monkeyp
         monkeypatch.setattr(multigrid, "ABS_CHUNK_ROWS", rows)
         got = multigrid.abs_product(A, y)
         assert got.tobytes() == expected.tobytes() and got[7] == 0.0
+
+
+@pytest.mark.parametrize("diagonal", ["sw_ne", "nw_se"])
+def test_the_grid_is_read_off_the_matrix(diagonal):
+    """A Friedrichs–Keller matrix gives its N and diagonal (a 5-point stencil, c = 0: either
+    serves, ``sw_ne``); anything else gives None, and the hierarchy is then algebraic."""
+    assert fk_grid(build(Problem(), 13, diagonal).A) == (13, diagonal)
+    assert fk_grid(build(Problem(c=0.0), 13, diagonal).A) == (13, "sw_ne")
+    assert fk_grid(sp.identity(15, format="csr")) is None  # not (N + 1)² unknowns
+    both = sp.csr_matrix(build(Problem(), 13, "sw_ne").A + build(Problem(), 13, "nw_se").A)
+    assert fk_grid(both) is None  # both diagonals: a 9-point stencil
+    wide = sp.diags([1.0, 1.0, 1.0], [-20, 0, 20], shape=(196, 196), format="csr")
+    assert fk_grid(wide) is None  # couplings beyond the neighbouring grid lines
+    algebraic = [level.A.shape for level in hierarchy(both, "classical", max_coarse=20).levels]
+    assert [level.A.shape for level in hierarchy(both, "geometric", max_coarse=20).levels] == algebraic
+
+
+@pytest.mark.parametrize("N", [16, 17, 21])
+@pytest.mark.parametrize("diagonal", ["sw_ne", "nw_se"])
+def test_the_grid_transfer_is_p1_interpolation(N, diagonal):
+    """Every other line, the last one kept; the prolongation is the coarse P1 function's value at
+    the fine vertices: for even N it equals ``interpolate_fk`` on the mesh with N / 2 cells, and at
+    any N it keeps constants and linear functions exactly (rows of nonnegative weights summing to 1)."""
+    lines = np.arange(N + 1)
+    coarse = coarse_lines(lines)
+    assert coarse[0] == 0 and coarse[-1] == N and coarse.size == N // 2 + 1
+    assert np.isin(coarse, lines).all() and np.diff(coarse).max() <= 3
+    P = fk_transfer(lines, coarse, diagonal)
+    assert P.shape == ((N + 1) ** 2, coarse.size**2) and P.data.min() > 0.0
+    X, Y = np.meshgrid(coarse, coarse, indexing="ij")
+    x, y = np.meshgrid(lines, lines, indexing="ij")
+    np.testing.assert_allclose(P @ (2.0 * X + 3.0 * Y + 1.0).ravel(), (2.0 * x + 3.0 * y + 1.0).ravel(), atol=1e-12)
+    if N % 2 == 0:
+        values = np.random.default_rng(N).random(coarse.size**2)
+        points = friedrichs_keller(N, diagonal).p
+        np.testing.assert_allclose(P @ values, interpolate_fk(N // 2, diagonal, values, points), atol=1e-14)
+        assert P.getnnz(axis=1).max() == 2  # nested: each fine vertex on a coarse edge or vertex
+
+
+def test_geometric_levels_are_cheaper_and_give_the_same_solution(cache):
+    """On a Friedrichs–Keller matrix the geometric hierarchy halves the grid down to the coarsest
+    level, with an operator complexity near 4/3 (classical AMG: above 2), and the route gives the
+    direct solution with it."""
+    disc, direct = cache.discrete({}, 21), cache.solution({}, 21)
+    geometric = hierarchy(sp.csr_matrix(disc.A), "geometric", max_coarse=SMALL_COARSE)
+    assert [level.A.shape[0] for level in geometric.levels] == [22**2, 11**2, 6**2, 3**2]
+    classical = hierarchy(sp.csr_matrix(disc.A), "classical", max_coarse=SMALL_COARSE)
+    assert geometric.operator_complexity() < 1.5 < classical.operator_complexity()
+    mg = multigrid_solve(disc.A, disc.b, disc.boundary, max_coarse=SMALL_COARSE)
+    assert mg.info["amg"] == "geometric" and mg.info["grid"] == [21, "sw_ne"]
+    assert_same_solution(mg, direct)

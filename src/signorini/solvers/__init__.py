@@ -21,10 +21,11 @@ from signorini.solvers.result import SolveResult
 
 SOLVERS = ("active_set", "multigrid", "auto", "cvxpy")
 EXACT_SOLVERS = ("active_set", "multigrid", "auto")  # the certified active-set routes
-# ``auto`` takes the multigrid route from this many unknowns on (N ≈ 775): the crossover of the
-# two routes on the paper's problem with the cascade, measured side by side in one process each
-# at N = 501, 701 and 1001 (the direct route ahead at 701, the multigrid route well ahead at 1001)
-MULTIGRID_FROM_UNKNOWNS = 600_000
+# ``auto`` takes the multigrid route from this many unknowns on (N ≈ 345): the crossover of the
+# two routes on the paper's problem with the cascade and the geometric hierarchy, measured side by
+# side in one process on one thread at N = 201 to 451 (CPU seconds, two runs each: even at 201
+# and 301 within the runs' spread, multigrid ahead at 351, ×1.6 at 401 and ×1.9 at 451)
+MULTIGRID_FROM_UNKNOWNS = 120_000
 
 
 def exact_route(name: str, n: int) -> str:

@@ -57,10 +57,12 @@ def linearised_error(
     lam: np.ndarray,
     active: np.ndarray,
     route: str = "active_set",
+    hierarchy: GalerkinHierarchy | None = None,
 ) -> AlgebraicError:
     """``AlgebraicError`` of ``(u, λ)`` with contact set ``active`` (constrained indices with ``u = 0``):
     ``A`` with the contact rows and columns replaced by the identity, solved by one sparse
-    factorisation (``route="active_set"``) or by multigrid-preconditioned CG (``"multigrid"``)."""
+    factorisation (``route="active_set"``) or by multigrid-preconditioned CG (``"multigrid"``),
+    with the solver's own ``hierarchy`` when given (``SolveResult.hierarchy``: no second set-up)."""
     A = sp.csr_matrix(A)
     free = np.ones(u.size, dtype=bool)
     free[np.asarray(active, dtype=np.int64)] = False
@@ -68,7 +70,7 @@ def linearised_error(
     lam_full[constrained] = lam
     r = np.where(free, A @ u - b - lam_full, 0.0)
     if route == "multigrid":
-        delta = _multigrid_correction(A, free, r)
+        delta = _multigrid_correction(A, free, r, hierarchy)
     else:
         keep = sp.diags(free.astype(float))
         clamped = (keep @ A @ keep + sp.diags((~free).astype(float))).tocsr()
@@ -77,11 +79,13 @@ def linearised_error(
     return AlgebraicError(delta=delta, energy=float(np.sqrt(max(float(r @ delta), 0.0))))
 
 
-def _multigrid_correction(A: sp.csr_matrix, free: np.ndarray, r: np.ndarray) -> np.ndarray:
+def _multigrid_correction(
+    A: sp.csr_matrix, free: np.ndarray, r: np.ndarray, hierarchy: GalerkinHierarchy | None
+) -> np.ndarray:
     """``Ã⁻¹ r`` by CG with the multigrid route's Galerkin hierarchy for the clamped matrix ``Ã``."""
     if not r.any():
         return np.zeros_like(r)
-    hierarchy = GalerkinHierarchy(A)
+    hierarchy = GalerkinHierarchy(A) if hierarchy is None else hierarchy
     hierarchy.update(free)
     delta, _, _ = pcg(hierarchy.matrix, r, np.zeros_like(r), hierarchy, ESTIMATE_RTOL, ESTIMATE_MAX_CG)
     return delta

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -24,6 +25,9 @@ class SolveResult:
     # one row per Newton step (iteration, active nodes, changes, the route's counters, elapsed
     # seconds), as the route's ``callback`` received them; empty for routes without steps
     history: list[dict] = field(default_factory=list)
+    # the multigrid route's ``GalerkinHierarchy``, Galerkin for the final contact set: what the
+    # algebraic-error estimate solves with (``algebraic_error.linearised_error``); None elsewhere
+    hierarchy: Any = field(default=None, repr=False, compare=False)
 
     def summary(self) -> dict:
         """JSON-ready diagnostics (everything but the vectors)."""

@@ -43,7 +43,8 @@ def solve_stage(
     result = solve_discrete(disc, solver=solver, **dict(solver_options or {}))
     t2 = time.perf_counter()
     route = "multigrid" if exact_route(solver, b.size) == "multigrid" else "active_set"
-    algebraic = linearised_error(A, b, boundary, result.u, result.lam, result.active, route)
+    algebraic = linearised_error(A, b, boundary, result.u, result.lam, result.active, route, result.hierarchy)
+    result.hierarchy = None  # its memory, before the archive is written
     log.info(
         "N=%d solver=%s iterations=%d active=%d certificate: %s; algebraic error max |δ| = %.1e, energy %.1e",
         N,

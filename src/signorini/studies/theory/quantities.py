@@ -72,7 +72,7 @@ def ritz_solve(
     A: sp.spmatrix, rhs: np.ndarray, start: np.ndarray | None = None, info: dict | None = None
 ) -> np.ndarray:
     """``x`` with ``A x = rhs`` (``A`` symmetric positive definite) by conjugate gradients
-    preconditioned with one classical algebraic multigrid V-cycle (the multigrid route's
+    preconditioned with one multigrid V-cycle (the multigrid route's geometric
     ``hierarchy`` and ``pcg``), from ``start`` (zero if None) to the energy-relative accuracy
     ``RITZ_TOL``.  ``info``, when given, receives the iterations, the final energy residual and
     the seconds of the set-up and of the iteration.  Raises ``NotConvergedError`` when CG does
@@ -88,7 +88,7 @@ def ritz_solve(
     x, iterations, ratio = pcg(A, rhs, x0, vcycle.matvec, RITZ_TOL, RITZ_MAX_ITER)
     if info is not None:
         info.update(
-            method="CG, classical AMG V-cycle",
+            method="CG, geometric multigrid V-cycle" if amg.grid else "CG, classical AMG V-cycle",
             levels=len(amg.levels),
             operator_complexity=float(amg.operator_complexity()),
             tol=RITZ_TOL,
