@@ -3,9 +3,11 @@ same warm start and cold against cold.
 
     python benchmarks/peers.py --N 501     # -> results/benchmarks/peers_N501.json
     python benchmarks/peers.py --N 201     # the ratio on a coarser mesh
+    python benchmarks/peers.py --N 501 --route multigrid   # our multigrid route: peers_N501_multigrid.json
 
 The configurations (of the shipped work-precision study, ``workflow/config.yaml``): our
-``solve_discrete`` from the cascade (coarse levels included) and cold, and each PETSc method of
+``solve_discrete`` by ``--route`` (the direct route, ``active_set``, or ``multigrid``) from the
+cascade (coarse levels included) and cold, and each PETSc method of
 ``--methods`` (default: TAO TRON with hypre BoomerAMG, ``vinewtonrsls`` with CHOLMOD and with
 CG/BoomerAMG: the fastest peers of the study that reach Table 1's digits on every mesh) from
 u = 0 and from the cascade's interpolated coarse solution (``<method>_ws``; the start's cost
@@ -54,8 +56,9 @@ TARGET_RATIO = 5.0
 TIME_LIMIT_S = 600.0
 
 
-def race_configs(names: list[str]) -> dict:
-    """Ours (cascade, cold) and the named peers of the shipped study, each also from the cascade start."""
+def race_configs(names: list[str], route: str = "active_set") -> dict:
+    """Ours by ``route`` (cascade, cold) and the named peers of the shipped study, each also from
+    the cascade start."""
     config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text(encoding="utf-8"))
     study = {**config["scenes"]["work_precision"]["study"], "same_warm_start": True}
     configs = study_configs(study)
@@ -63,7 +66,7 @@ def race_configs(names: list[str]) -> dict:
     if unknown:
         peers = sorted(k for k, c in configs.items() if c.peer and not k.endswith(WARM_SUFFIX))
         raise SystemExit(f"not a PETSc peer of the study: {unknown}; choose from {peers}")
-    chosen = ["active_set", "active_set_cold", *names, *(n + WARM_SUFFIX for n in names)]
+    chosen = [route, f"{route}_cold", *names, *(n + WARM_SUFFIX for n in names)]
     return {n: configs[n] for n in chosen}
 
 
@@ -93,11 +96,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--methods", default=",".join(METHODS), help="peer configurations of the study")
     parser.add_argument("--python", default=PEER_PYTHON, help="the interpreter with petsc4py")
     parser.add_argument("--max-wait", type=float, default=600.0, help="longest total wait for a quiet machine [s]")
+    parser.add_argument("--route", choices=["active_set", "multigrid"], default="active_set", help="our route")
     parser.add_argument("--out", type=Path, default=None)
     args = parser.parse_args(argv)
-    out = args.out or ROOT / "results" / "benchmarks" / f"peers_N{args.N}.json"
+    name = f"peers_N{args.N}" + ("" if args.route == "active_set" else f"_{args.route}")
+    out = args.out or ROOT / "results" / "benchmarks" / f"{name}.json"
     methods = args.methods.split(",")
-    configs = race_configs(methods)
+    configs = race_configs(methods, args.route)
     found = probe(args.python, ROOT / PEER_DRIVER)
     if not found.get("petsc4py"):
         raise SystemExit(f"PETSc peers unavailable: {found.get('error')} (make setup-peers)")
@@ -119,8 +124,9 @@ def main(argv: list[str] | None = None) -> int:
         "kernel": raced["kernel"],
         "start": raced["start"],
         "configs": timed,
-        "same_warm_start": comparison(timed, "active_set", methods, WARM_SUFFIX),
-        "cold_against_cold": comparison(timed, "active_set_cold", methods, ""),
+        "route": args.route,
+        "same_warm_start": comparison(timed, args.route, methods, WARM_SUFFIX),
+        "cold_against_cold": comparison(timed, f"{args.route}_cold", methods, ""),
         "load_average_start": list(load_start),
         "load_average_end": list(os.getloadavg()),
         "python": sys.version.split()[0],

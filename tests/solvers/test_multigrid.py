@@ -242,3 +242,48 @@ def test_geometric_levels_are_cheaper_and_give_the_same_solution(cache):
     mg = multigrid_solve(disc.A, disc.b, disc.boundary, max_coarse=SMALL_COARSE)
     assert mg.info["amg"] == "geometric" and mg.info["grid"] == [21, "sw_ne"]
     assert_same_solution(mg, direct)
+
+
+def test_a_cold_start_solves_the_coarse_grids_problem_first():
+    """Without a warm start the route solves the problem on its first coarse grid (operator
+    R A P, load R b, constrained on the coarse boundary; recursively) and starts from its
+    prolongation: the direct solution, in a few Newton steps where the plain cold start grows
+    the contact set by a node per step."""
+    from signorini.solvers import multigrid
+
+    disc = build(Problem(), 101)
+    direct = solve_discrete(disc, "active_set")
+    nested = multigrid_solve(disc.A, disc.b, disc.boundary)
+    assert nested.info["nested_start"] and nested.info["grid"] == [101, "sw_ne"]
+    assert_same_solution(nested, direct)
+    H = GalerkinHierarchy(sp.csr_matrix(disc.A))
+    start = multigrid.nested_start(H, disc.b, disc.boundary, {})
+    assert start is not None and start[disc.boundary].min() >= 0.0  # feasible: P v ≥ 0 where v ≥ 0
+    with pytest.MonkeyPatch.context() as patch:  # the plain cold start, for comparison
+        patch.setattr(multigrid, "NESTED_MIN_CELLS", 10**6)
+        cold = multigrid_solve(disc.A, disc.b, disc.boundary, max_iter=200)
+    assert not cold.info["nested_start"]
+    assert_same_solution(cold, direct)
+    assert nested.iterations <= cold.iterations / 2 and nested.info["cg_iterations"] < cold.info["cg_iterations"]
+
+
+def test_a_nested_start_that_does_not_settle_falls_back_to_the_plain_cold_start(monkeypatch, caplog):
+    """N = 50: one nested level (25 cells).  When the fine iteration from the nested start does
+    not settle, the route solves again from the plain cold start and says so."""
+    from signorini.solvers import multigrid
+
+    disc = build(Problem(), 50)
+    direct = solve_discrete(disc, "active_set")
+    real, calls = multigrid.iterate, []
+
+    def second_call_fails(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:  # the coarse grid's iteration first, then the fine one's
+            raise NotConvergedError("active set did not repeat")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(multigrid, "iterate", second_call_fails)
+    with caplog.at_level("WARNING", logger=multigrid.__name__):
+        mg = multigrid_solve(disc.A, disc.b, disc.boundary)
+    assert len(calls) == 3 and "plain cold start" in caplog.text
+    assert_same_solution(mg, direct)

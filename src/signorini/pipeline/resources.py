@@ -1,9 +1,9 @@
 """Memory and run-time requests of the per-mesh jobs, defined once: the rules' ``resources`` and
 the config check's bound use them.  Memory grows with the number of unknowns, (N + 1)² ≈ N²; the
 constants follow the peaks measured at N = 2001 (``docs/evidence/scale.json``: discretise
-0.9 GiB, solve 7.6 GiB by the direct route and 2.9 GiB by the multigrid route, a mesh's 20
-convention norms in one job 1.9 GiB; ``docs/evidence/stage_jobs_N2001.json``: theory_quantities
-2.3 GiB, its Ritz projection by multigrid CG) with some headroom; a solve
+0.9 GiB, solve 7.3 GiB by the direct route and 1.8 GiB by the multigrid route (6.9 GiB at
+N = 4001), a mesh's 20 convention norms in one job 1.9 GiB, theory_quantities 2.3 GiB, its Ritz
+projection by multigrid CG) with some headroom; a solve
 job's request follows the route its scene's solver takes on that mesh.  Run times at N = 2001
 on a loaded 2-CPU machine (load about 4): discretise 130 s, solve 216 s, a norm 20–80 s,
 theory_quantities 228 s; the requests are about ten times these, since a job that outlives its
@@ -22,7 +22,7 @@ from signorini.fem.norms.names import parse_norm_name
 MEM_MB = {
     "discretise": (500, 4000),  # the stencil assembly streams: O(n) memory
     "solve": (500, 500),  # the direct route: a sparse Cholesky factor with its fill-in
-    "solve_multigrid": (500, 1200),  # the multigrid route: the matrix, its hierarchy, a few vectors
+    "solve_multigrid": (500, 2000),  # the multigrid route: the matrix, its hierarchy, a few vectors
     "norm": (500, 2000),
     "theory_quantities": (500, 1500),  # O(n): the matrix, its AMG hierarchy, chunks of quadrature
     "work_precision_measure": (1500, 250),
