@@ -18,3 +18,24 @@ def test_the_report_counts_the_runs_and_has_one_line_per_case(small_atlas):
     assert "- scaling, active_set (A_1e-6 ok): over the 1 solved amplitudes" in md
     bad = next(line for line in md.splitlines() if line.startswith("- **bad_spd**"))
     assert "all 1 solvers failed as required with BadInputError: matrix is not positive semidefinite" in bad
+
+
+def test_the_summary_compares_the_other_exact_columns_with_the_direct_one():
+    """A multigrid column must return the direct route's discrete solution: the summary gives its
+    largest distance to ``active_set`` and whether the contact sets agree."""
+    from helpers import ROOT
+
+    from signorini.fem.problem import Problem
+    from signorini.pipeline.config import load_config
+    from signorini.studies.stability.atlas import Atlas, Case, parse_atlas
+    from signorini.studies.stability.cases import run_case
+
+    solvers = parse_atlas(load_config(ROOT / "workflow/config.yaml")["scenes"]["stability"]).solvers
+    case = Case("A_10", "scaling", Problem().as_dict(), 30, solvers=("active_set", "multigrid", "multigrid_cold"))
+    info, arrays = run_case(Atlas((case,), solvers, ("L4",), timeout_s=60), case)
+    df = atlas_table([info], [arrays], ("L4",))
+    assert list(df["route"]) == ["active_set", "multigrid", "multigrid"]
+    line = next(x for x in atlas_report(df, [info], ("L4",)).splitlines() if x.startswith("- The other exact"))
+    for solver in ("multigrid", "multigrid_cold"):
+        assert f"{solver} (1 cases, 1 ok; max Δu vs exact " in line
+    assert line.count("within 1e-12; the same contact set in all") == 2

@@ -300,7 +300,8 @@ def run_case(atlas: Atlas, case: Case) -> tuple[dict, dict[str, np.ndarray]]:
             outcome, payload = run_isolated(
                 lambda spec=spec: _solve_and_measure(disc, spec, atlas.norms, u_norms), atlas.timeout_s
             )
-        row = {"solver": label, **classify(outcome, payload, spec, case), "total_s": time.perf_counter() - t1}
+        row = {"solver": label, "route": spec.solver, **classify(outcome, payload, spec, case),
+               "total_s": time.perf_counter() - t1}
         if outcome == "ok" and payload["row"]["finite"]:
             arrays[f"u_{label}"] = payload["u"]
             arrays[f"active_{label}"] = payload["active"]

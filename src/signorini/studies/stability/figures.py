@@ -120,7 +120,7 @@ def reaction_panels(df, markers: dict, ax_err, ax_cond) -> None:
         if solver != "active_set" and not solver.endswith("_raw"):
             ax_err.loglog(sub["x"], sub["diff_to_active_set"].clip(lower=1e-17), ls=":", marker=markers[solver],
                           label=f"Δu {solver} vs exact", lw=1, ms=3)
-    ax_err.set_title("stiff reaction: errors and distance of the QP solvers to the exact solution", fontsize=9)
+    ax_err.set_title("stiff reaction: errors and distance of the other solvers to the exact solution", fontsize=9)
     ax_err.legend(fontsize=6, ncol=2)
     ax_cond.loglog(exact["x"], exact["cond_A"], marker="o", label=r"$\kappa_2(A)$, $A = K + cM$")
     ax_cond.loglog(exact["x"], exact["cond_free"], marker="s", label=r"$\kappa_2(A_{FF})$, free block")

@@ -19,6 +19,7 @@ COLUMNS = [
     "corrupt",
     "expected",
     "solver",
+    "route",
     "status",
     "as_expected",
     "reason",
