@@ -17,6 +17,11 @@ os.environ.update(
 from signorini.pipeline.jobenv import single_threaded
 
 single_threaded()  # one BLAS/OpenMP thread per job unless the caller says otherwise (jobs inherit it)
+from signorini.pipeline.scheduling import coalesce_reevaluations
+
+# Snakemake's scheduler would start one more re-evaluation timer chain per finished job, a main
+# loop spinning ever faster during a long run: keep one timer pending
+coalesce_reevaluations()
 
 # Snakemake names no file or line for a YAML syntax error in a config file: check this one first
 # (python -m signorini.pipeline.config my.yaml checks files given with --configfile).

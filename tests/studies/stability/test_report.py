@@ -37,5 +37,5 @@ def test_the_summary_compares_the_other_exact_columns_with_the_direct_one():
     assert list(df["route"]) == ["active_set", "multigrid", "multigrid"]
     line = next(x for x in atlas_report(df, [info], ("L4",)).splitlines() if x.startswith("- The other exact"))
     for solver in ("multigrid", "multigrid_cold"):
-        assert f"{solver} (1 cases, 1 ok; max Δu vs exact " in line
+        assert f"{solver} (1 cases, 1 ok; max Δu vs exact " in line and " in A_10, " in line
     assert line.count("within 1e-12; the same contact set in all") == 2

@@ -122,10 +122,12 @@ def _exact_columns(df) -> list[str]:
             continue
         differ = compared[~compared["same_contact_as_active_set"].astype(bool)]["case"].tolist()
         contact = "the same contact set in all" if not differ else f"a different contact set in {', '.join(differ)}"
-        worst = compared["diff_to_active_set"].max()
+        at = compared["diff_to_active_set"].idxmax()
+        worst = compared.loc[at, "diff_to_active_set"]
         parts.append(
             f"{solver} ({len(compared)} cases, {int((compared['status'] == 'ok').sum())} ok; max Δu vs exact "
-            f"{_fmt(worst)}, {'within' if worst <= 1e-12 else 'ABOVE'} 1e-12; {contact})"
+            f"{_fmt(worst)} in {compared.loc[at, 'case']}, {'within' if worst <= 1e-12 else 'ABOVE'} 1e-12; "
+            f"{contact})"
         )
     return [f"- The other exact columns against active_set: {'; '.join(parts)}."] if parts else []
 
