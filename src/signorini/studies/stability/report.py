@@ -107,6 +107,9 @@ def _summary(df) -> list[str]:
     return lines + _exact_columns(df)
 
 
+SAME_SOLUTION_RTOL = 1e-12  # max |Δu| ≤ SAME_SOLUTION_RTOL · max |u|: the same discrete solution
+
+
 def _exact_columns(df) -> list[str]:
     """The other certified columns (cold start, multigrid) against active_set on the same case:
     they must return the same discrete solution, not merely a certified one."""
@@ -124,10 +127,10 @@ def _exact_columns(df) -> list[str]:
         contact = "the same contact set in all" if not differ else f"a different contact set in {', '.join(differ)}"
         at = compared["diff_to_active_set"].idxmax()
         worst = compared.loc[at, "diff_to_active_set"]
+        verdict = "within" if worst <= SAME_SOLUTION_RTOL else "ABOVE"
         parts.append(
             f"{solver} ({len(compared)} cases, {int((compared['status'] == 'ok').sum())} ok; max Δu vs exact "
-            f"{_fmt(worst)} in {compared.loc[at, 'case']}, {'within' if worst <= 1e-12 else 'ABOVE'} 1e-12; "
-            f"{contact})"
+            f"{_fmt(worst)} in {compared.loc[at, 'case']}, {verdict} {SAME_SOLUTION_RTOL:g}; {contact})"
         )
     return [f"- The other exact columns against active_set: {'; '.join(parts)}."] if parts else []
 
