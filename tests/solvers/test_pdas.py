@@ -1,5 +1,5 @@
 """The active-set iteration both exact routes share (``signorini.solvers.pdas``): the per-step
-history and callback, and the protocol of inexact and accurate solves."""
+history and callback, the protocol of inexact and accurate solves, and frontier growth."""
 
 from __future__ import annotations
 
@@ -7,10 +7,11 @@ import logging
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 
 from signorini.solvers import NotConvergedError, active_set_solve
 from signorini.solvers.active_set import DirectSystems
-from signorini.solvers.pdas import initial_active, iterate, prepare_qp
+from signorini.solvers.pdas import CREEP_STEPS, Frontier, initial_active, iterate, prepare_qp
 
 log = logging.getLogger(__name__)
 
@@ -104,3 +105,36 @@ def test_a_route_uses_a_canonical_matrix_as_it_is_and_changes_none(cache, route)
     tidy = prepare_qp(messy, b, disc.boundary)[0]
     assert not np.shares_memory(tidy.data, messy.data) and (tidy != A).nnz == 0
     np.testing.assert_array_equal(messy.indices, kept)
+
+
+def _path_adjacency(n: int) -> sp.csr_matrix:
+    """The boundary nodes 0, …, n-1 of an open line, each next to its two neighbours."""
+    return sp.diags([np.ones(n - 1), np.ones(n - 1)], [-1, 1], format="csr")
+
+
+def test_frontier_creeps_one_node_per_end_then_doubles_its_reach():
+    """A contact set in the middle of a line of 201 nodes, every other node violated: one node
+    per end and step for the first steps, then a reach that doubles, so the line is covered in
+    ``CREEP_STEPS + log₂ 100`` steps or so instead of 100."""
+    n = 201
+    frontier, active = Frontier(_path_adjacency(n)), np.zeros(n, dtype=bool)
+    active[n // 2] = True
+    sizes = []
+    while not active.all():
+        active = active | frontier.restrict(~active, active)
+        sizes.append(int(active.sum()))
+    expected, size = [], 1
+    while size < n:  # reach 1 for CREEP_STEPS steps, then 2, 4, 8, … at both ends
+        size = min(n, size + 2 * 2 ** max(0, len(expected) - CREEP_STEPS))
+        expected.append(size)
+    assert sizes == expected
+    assert sizes[:3] == [3, 5, 7] and len(sizes) <= CREEP_STEPS + 8
+
+
+def test_frontier_takes_the_full_step_when_no_violated_node_is_near():
+    """No violated node within reach: every violated node enters (PDAS's own step)."""
+    n = 50
+    frontier, active, grow = Frontier(_path_adjacency(n)), np.zeros(n, dtype=bool), np.zeros(n, dtype=bool)
+    active[:3], grow[30:40] = True, True
+    np.testing.assert_array_equal(frontier.restrict(grow, active), grow)
+    assert frontier.held == 0

@@ -36,9 +36,8 @@ def solve_discrete(
     """Solve (S_h).  For the exact routes (``active_set``, ``multigrid``, ``auto``),
     ``warm_start="cascade"`` first solves on the coarser mesh ``N // CASCADE_FACTOR``
     (recursively, with the same route name: ``auto`` picks by each mesh's size) and starts from
-    its interpolant (``cascade_start``); when the active set does not settle from that start (the
-    contact set grows by one node per step from a start far from it), the solve is repeated from
-    the cold start."""
+    its interpolant (``cascade_start``); when the active set does not settle from that start in
+    ``max_iter`` steps, the solve is repeated from the cold start."""
     if solver in EXACT_SOLVERS:
         if isinstance(warm_start, str):
             if warm_start != "cascade":

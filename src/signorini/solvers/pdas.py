@@ -27,6 +27,7 @@ from signorini.solvers.certificate import KKTError, NotConvergedError, check_qp_
 from signorini.solvers.result import SolveResult
 
 StepCallback = Callable[[dict], None]
+CREEP_STEPS = 3  # frontier steps of one node per end before the frontier's reach starts doubling
 
 
 class NewtonSystems(Protocol):
@@ -98,16 +99,50 @@ def initial_active(
     return active
 
 
+class Frontier:
+    """Frontier growth: violated nodes enter only within ``reach`` boundary neighbours of the
+    contact set while any such exists; ``reach`` is one node for the first ``CREEP_STEPS`` steps
+    that hold nodes back and doubles with each one after them.
+
+    Growing the contact set only at its ends keeps an undersized set near the free point from
+    pushing the whole far boundary (where u_h is O(h²)-small and biactive in the limit) into
+    contact: the plain PDAS step would clamp all of it and release it again, two large changes.
+    With a fixed reach of one node a set that must grow by m nodes takes about m/2 steps (one
+    per end and step); the doubling reach takes about log₂ m more after the first few, and a set
+    a few nodes short still grows one node per end and step.  The full step is taken when no
+    violated node is within reach, so termination is PDAS's own."""
+
+    def __init__(self, adjacency: sp.csr_matrix):
+        self.adjacency = adjacency
+        self.held = 0  # steps that held violated nodes back
+
+    @property
+    def reach(self) -> int:
+        return 1 << max(0, self.held - CREEP_STEPS)
+
+    def restrict(self, grow: np.ndarray, active: np.ndarray) -> np.ndarray:
+        """The nodes of the mask ``grow`` that enter the contact set ``active`` in this step."""
+        near = active
+        for _ in range(min(self.reach, active.size)):
+            near = near | ((self.adjacency @ near.astype(np.int8)) > 0)
+        frontier = grow & near
+        if not frontier.any():
+            return grow
+        if np.count_nonzero(frontier) < np.count_nonzero(grow):
+            self.held += 1
+        return frontier
+
+
 def next_active(
     A: sp.csr_matrix,
     b: np.ndarray,
     B: np.ndarray,
     u: np.ndarray,
     active: np.ndarray,
-    adjacency: sp.csr_matrix | None,
+    frontier: Frontier | None,
 ) -> np.ndarray:
-    """The PDAS update of the mask ``active`` from the Newton iterate ``u``; with ``adjacency``
-    (frontier growth) violated nodes enter only next to the contact set while any such exists."""
+    """The PDAS update of the mask ``active`` from the Newton iterate ``u``; with ``frontier``
+    (frontier growth) violated nodes enter only near the contact set while any such exists."""
     lam = np.where(active, (A @ u - b)[B], 0.0)
     # hysteresis below round-off keeps degenerate (u = λ = 0) nodes from flip-flopping;
     # ≥ keeps them when everything vanishes (f ≡ 0: eps_lam = 0), where releasing the
@@ -116,16 +151,8 @@ def next_active(
     eps_u = 1e-13 * np.abs(u).max(initial=0.0)
     keep = active & (lam >= -eps_lam)
     grow = ~active & (u[B] < -eps_u)
-    if adjacency is not None:
-        # Grow the contact set only at its ends while that is possible.  An undersized
-        # contact set near the free point pushes the whole far boundary (where u_h is
-        # O(h²)-small and biactive in the limit) below zero; the plain PDAS step would clamp
-        # all of it and release it again, two large changes that each cost a factorisation.
-        # The full step is taken when no violated node touches the contact set, so
-        # termination is PDAS's own.
-        frontier = grow & ((adjacency @ active.astype(np.int8)) > 0)
-        if frontier.any():
-            grow = frontier
+    if frontier is not None:
+        grow = frontier.restrict(grow, active)
     return keep | grow
 
 
@@ -153,13 +180,13 @@ def iterate(
     to accurate solves for good; a cycle of accurate ones, or ``max_iter`` steps, raises
     ``NotConvergedError``."""
     t0 = time.perf_counter()
-    adjacency = boundary_adjacency(A, B) if frontier_growth else None
+    frontier = Frontier(boundary_adjacency(A, B)) if frontier_growth else None
     seen: set[bytes] = set()
     history: list[dict] = []
     accurate = always = systems.exact
     for it in range(1, max_iter + 1):
         u = systems(free_mask(b.size, B, active), accurate)
-        new_active = next_active(A, b, B, u, active, adjacency)
+        new_active = next_active(A, b, B, u, active, frontier)
         counters = systems.counters()
         row = {
             "iteration": it,
