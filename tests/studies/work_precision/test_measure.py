@@ -370,6 +370,27 @@ def test_figure_draws_the_fastest_configuration_per_family_with_the_legend_below
     assert all(leg.get_window_extent().y1 < lowest for leg in fig.legends)  # no legend over a panel
 
 
+def test_figure_keeps_the_fastest_exact_configuration_of_each_start_when_routes_are_too_many():
+    """Four exact configurations (two routes × two starts) and five solver families: beyond eight
+    series, per start the exact configuration with the fewest CPU seconds on the finest mesh
+    stays (the direct route from the cascade, the multigrid route from the cold start)."""
+    from signorini.studies.work_precision import figures as wpfig
+
+    rows = []
+    for N in (101, 201):
+        rows += [
+            _race_row(N, "ours", "cascade", "exact", 1.0, 2.0),
+            _race_row(N, "ours_mg", "cascade", "exact", 2.0, 4.0, solver="multigrid"),
+            _race_row(N, "ours_cold", "cold", "exact", 4.0 if N == 201 else 1.0, 8.0),
+            _race_row(N, "ours_mg_cold", "cold", "exact", 1.5, 3.0, solver="multigrid"),
+        ]
+        rows += [_race_row(N, f"qp{k}", "cold", "1e-08", 1.0, 20.0, solver=f"QP{k}") for k in range(5)]
+    df = pd.DataFrame(rows)
+    series = wpfig.figure_series(df, ["L4"])
+    assert [c for c in series if not c.startswith("qp")] == ["ours", "ours_mg_cold"]
+    assert len(series) == 7
+
+
 def test_inaccurate_answers_are_grouped_with_their_worst_ratio_from_the_recorded_numbers():
     import pandas as pd
 

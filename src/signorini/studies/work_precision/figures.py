@@ -38,8 +38,9 @@ def figure_series(df, table1_norms: Sequence[str] | None = None) -> list[str]:
     family's fastest run of status ok there; its first configuration otherwise).  A family none
     of whose runs is ``ok`` is left out: its failures are in the report.  Beyond ``MAX_SERIES``
     (the palette), only the first exact configuration of each route and start stays (a backend
-    variant goes, another route such as multigrid stays), and if that is still too many, of each
-    start; their runs are in the CSV and the report."""
+    variant goes, another route such as multigrid stays), and if that is still too many, the
+    fastest exact configuration of each start on the finest mesh; their runs are in the CSV and
+    the report."""
     from signorini.published import TABLE1_NORMS
     from signorini.studies.work_precision.findings import RANK_KEY, fastest_to_digits
 
@@ -64,9 +65,12 @@ def figure_series(df, table1_norms: Sequence[str] | None = None) -> list[str]:
 
         start = dict(zip(df["config"], starts(df), strict=True))
         solver = dict(zip(df["config"], df["solver"].astype(str), strict=True))
-        for group in (lambda c: (solver[c], start[c]), lambda c: start[c]):  # by route and start, then by start
+        seconds = df[df["N"] == finest].groupby("config")[RANK_KEY].min()
+        fastest_first = sorted(exact, key=lambda c: seconds.get(c, float("inf")))
+        # by route and start (the first configuration: the default backend), then by start (the fastest)
+        for group, order in ((lambda c: (solver[c], start[c]), exact), (lambda c: start[c], fastest_first)):
             if len(chosen) > MAX_SERIES:
-                first = {group(c): c for c in reversed(exact)}
+                first = {group(c): c for c in reversed(order)}
                 chosen = [c for c in chosen if c not in exact or first.get(group(c)) == c]
     return chosen
 
