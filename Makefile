@@ -76,9 +76,10 @@ report: setup
 bench: setup
 	$(BIN)/python benchmarks/workflow.py
 
-## clean-corrupt: delete the damaged artifacts a run moved aside (results/**/*.corrupt)
+## clean-corrupt: delete what runs moved aside, damaged or out of date (results/**/*.corrupt, *.stale; results/ may be a link)
 clean-corrupt:
-	find results -name '*.corrupt' -print -delete 2>/dev/null || true
+	@if [ -e results ]; then find -L results \( -name '*.corrupt' -o -name '*.stale' \) -type f -print -delete; \
+	else echo "clean-corrupt: no results/ here: nothing to delete"; fi
 
 ## clean-results: remove the cache (results/) and Snakemake's metadata
 clean-results:

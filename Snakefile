@@ -17,11 +17,12 @@ os.environ.update(
 from signorini.pipeline.jobenv import single_threaded
 
 single_threaded()  # one BLAS/OpenMP thread per job unless the caller says otherwise (jobs inherit it)
-from signorini.pipeline.scheduling import coalesce_reevaluations
+from signorini.pipeline import patches
 
 # Snakemake's scheduler would start one more re-evaluation timer chain per finished job, a main
-# loop spinning ever faster during a long run: keep one timer pending
-coalesce_reevaluations()
+# loop spinning ever faster during a long run: keep one timer pending (every patch of Snakemake's
+# internals is in signorini/pipeline/patches.py)
+patches.coalesce_reevaluations()
 
 # Snakemake names no file or line for a YAML syntax error in a config file: check this one first
 # (python -m signorini.pipeline.config my.yaml checks files given with --configfile).
@@ -33,9 +34,13 @@ from signorini.pipeline.config import (
     validate_config,
 )
 
-# the config and schema next to this file, whatever the working directory (-d, -s)
+# the config and schema next to this file, whatever the working directory (-d, -s); the files of
+# --configfile Snakemake has read already, keeping the last block of a key given twice: refused
+# with file and line
 with one_line_errors():
     load_yaml(os.path.join(workflow.basedir, DEFAULT_CONFIG))
+    for _path in getattr(workflow.config_settings, "configfiles", ()):
+        load_yaml(os.path.relpath(_path))
 
 
 configfile: os.path.join(workflow.basedir, DEFAULT_CONFIG)

@@ -12,7 +12,9 @@ IncompleteFilesException (outputs of killed jobs still marked incomplete in .sna
 by one with ``--rerun-incomplete``, as Snakemake tells the user; a run still alive ``GRACE_S``
 after its signal is killed with SIGKILL (and unlocked), and counted.  Then one run recovers, and every
 artifact must equal the reference: tables and archives byte for byte, the JSON sidecars as data
-without what they record about the run (wall times, the machine's load: ``RUN_DEPENDENT``).
+without what they record about the run (wall times, the machine's load: ``RUN_DEPENDENT``).  Each
+run's console is kept and counted (lines, bytes, tracebacks, ``interrupted:`` lines): what a user
+sees after Ctrl-C.
 
     python benchmarks/kill_campaign.py --kills 15 --out docs/evidence/kill_campaign.json
 """
@@ -42,23 +44,38 @@ GRACE_S = 180  # how long a signalled run may take to stop its jobs and exit
 
 
 def copy_repo(dest: Path) -> Path:
+    """Snakefile, workflow/, src/ and the default profile (the console and rerun settings a user's
+    `snakemake` call gets in a checkout)."""
     dest.mkdir(parents=True)
     shutil.copy2(ROOT / "Snakefile", dest / "Snakefile")
     ignore = shutil.ignore_patterns("__pycache__", "*.egg-info", "*.pyc")
-    for name in ("workflow", "src"):
+    for name in ("workflow", "src", "profiles"):
         shutil.copytree(ROOT / name, dest / name, ignore=ignore)
     return dest
 
 
-def start(repo: Path, target: str, *extra: str) -> subprocess.Popen:
-    return subprocess.Popen(
-        [SNAKEMAKE, "-c2", *extra, target],
-        cwd=repo,
-        start_new_session=True,  # its own process group: the signal reaches the jobs too, as Ctrl-C does
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-        env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"},
-    )
+def start(repo: Path, target: str, console: Path, *extra: str) -> subprocess.Popen:
+    with open(console, "wb") as out:
+        return subprocess.Popen(
+            [SNAKEMAKE, "-c2", *extra, target],
+            cwd=repo,
+            start_new_session=True,  # its own process group: the signal reaches the jobs too, as Ctrl-C does
+            stdout=out,
+            stderr=subprocess.STDOUT,
+            env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"},
+        )
+
+
+def console_summary(console: Path) -> dict:
+    """What the user saw of a run: lines, bytes, tracebacks, and the one-line interrupt notice."""
+    text = console.read_text(encoding="utf-8", errors="replace")
+    lines = text.splitlines()
+    return {
+        "console_lines": len(lines),
+        "console_bytes": len(text.encode()),
+        "tracebacks": text.count("Traceback"),
+        "interrupted_lines": sum(line.startswith("interrupted:") for line in lines),
+    }
 
 
 def artifacts(repo: Path, scene: str) -> dict[str, Path]:
@@ -118,7 +135,8 @@ def campaign(repo: Path, scene: str, kills: int, rng: random.Random, delay: tupl
             (repo / removed).unlink()
         name = rng.choice(sorted(SIGNALS))
         after = round(rng.uniform(*delay), 1)
-        run = start(repo, target, *(["--rerun-incomplete"] if incomplete else []))
+        console = repo.parent / f"console-{len(rounds)}.txt"
+        run = start(repo, target, console, *(["--rerun-incomplete"] if incomplete else []))
         try:
             run.wait(timeout=after)
             killed = False
@@ -143,6 +161,7 @@ def campaign(repo: Path, scene: str, kills: int, rng: random.Random, delay: tupl
                 "damaged_after": damaged(repo),
                 "lock_left": any((repo / ".snakemake/locks").glob("*")),
                 "temporaries_left": sorted(str(p.relative_to(repo)) for p in (repo / "results").rglob(".*.tmp")),
+                **console_summary(console),
             }
         )
         if rounds[-1]["lock_left"]:  # only after kill -9: Snakemake released it on SIGINT/SIGTERM
@@ -190,6 +209,11 @@ def main(argv: list[str] | None = None) -> int:
             "runs_needing_rerun_incomplete": sum(r["rerun_incomplete"] for r in rounds),
             "rounds": rounds,
             "damaged_after_any_kill": sorted({p for r in rounds for p in r["damaged_after"]}),
+            "interrupts_console_lines": [r["console_lines"] for r in rounds if r["killed"]],
+            "interrupts_with_a_traceback": sum(r["killed"] and r["tracebacks"] > 0 for r in rounds),
+            "interrupts_without_one_interrupted_line": sum(
+                r["killed"] and r["signal"] == "SIGINT" and r["interrupted_lines"] != 1 for r in rounds
+            ),
             "recovery_exit_code": recovery.returncode,
             "files_compared": len(set(want) & set(got)),
             "missing_after_recovery": sorted(set(want) - set(got)),

@@ -99,8 +99,8 @@ def dry_run_jobs(text: str) -> list[dict]:
             key, value = m.groups()
             if key == "wildcards":
                 jobs[-1]["wildcards"].update(kv.split("=", 1) for kv in value.split(", "))
-            else:
-                jobs[-1][key] = value.split(", ")
+            else:  # a path with its flags as Snakemake prints them: "paper_figures/table1.csv (update)"
+                jobs[-1][key] = [re.sub(r" \([a-z, ]+\)$", "", item) for item in value.split(", ")]
     return jobs
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -125,6 +126,82 @@ def test_the_cli_and_the_config_check_give_the_same_message(capsys, no_mesh):
     assert str(info.value).replace("scenes.smoke.problem.A", "--A") == err.removeprefix("error: ").strip()
 
 
-def test_a_non_finite_norm_is_an_error(capsys):
+def test_an_exponent_a_double_cannot_hold_is_refused_before_the_solve(capsys, no_mesh):
     code, out, err = run_cli(capsys, "--N", "8", "--norms", "L4,L99999")
-    assert code == 1 and "L99999 = inf is not a finite number" in err, (out, err)
+    assert code == 2 and "the exponent p = 99999 of L99999 is too large" in err, (out, err)
+
+
+def test_a_non_finite_norm_is_an_error(capsys, monkeypatch):
+    """A norm that still comes out as inf or NaN (a true norm's bound overflowing) is printed,
+    then named as an error, exit code 1."""
+    import signorini.fem.norms.true as true
+
+    monkeypatch.setattr(true, "evaluate_named_norms", lambda *a: {"L4": 1.0, "L1000_true": float("inf")})
+    code, out, err = run_cli(capsys, "--N", "8", "--norms", "L4,L1000_true")
+    assert code == 1 and "L1000_true = inf is not a finite number" in err, (out, err)
+
+
+def test_an_output_that_cannot_be_written_is_refused_before_the_solve(capsys, no_mesh, tmp_path, monkeypatch):
+    """``--vtk`` onto a FIFO (a device node as root), into a directory that cannot be written, or
+    through a link loop: one line, exit code 2, before any mesh; a FIFO stays a FIFO."""
+    import os
+    import stat
+
+    os.mkfifo(tmp_path / "fifo")
+    (tmp_path / "loop").symlink_to("loop")
+    locked = tmp_path / "locked"
+    locked.mkdir(mode=0o555)
+    if os.geteuid() == 0:  # root writes anywhere: ask os.access as a user would be answered
+        access = os.access
+        monkeypatch.setattr(os, "access", lambda p, mode: access(p, mode) and Path(p).resolve() != locked)
+    cases = {
+        "fifo": "is a named pipe (FIFO), not a regular file",
+        "locked/u.vtu": "the directory locked is not writable",
+        "loop": "loop cannot be used: Too many levels of symbolic links",
+    }
+    if os.geteuid() == 0:
+        os.mknod(tmp_path / "null", 0o600 | stat.S_IFCHR, os.makedev(1, 3))  # a private /dev/null
+        cases["null"] = "is a character device, not a regular file"
+    monkeypatch.chdir(tmp_path)
+    for path, message in cases.items():
+        code, out, err = run_cli(capsys, "--N", "11", "--vtk", path)
+        assert code == 2 and out == "" and err.startswith("error: --vtk: "), err
+        assert message in err and err.count("\n") == 1, err
+    assert stat.S_ISFIFO(os.lstat(tmp_path / "fifo").st_mode)
+
+
+def test_through_a_symlink_the_target_is_written_and_the_link_kept(capsys, tmp_path):
+    target = tmp_path / "u.vtu"
+    target.write_text("old", encoding="utf-8")
+    (tmp_path / "link.vtu").symlink_to(target)
+    code, out, err = run_cli(capsys, "--N", "6", "--vtk", str(tmp_path / "link.vtu"))
+    assert code == 0 and f"wrote {target} (the file the link {tmp_path / 'link.vtu'} points to)" in out, err
+    assert (tmp_path / "link.vtu").is_symlink() and read_vtu(target)["u_h"].shape == (49,)
+
+
+def test_an_overflowing_system_is_refused_before_the_solve(capsys, monkeypatch):
+    """An amplitude whose load vector overflows: one line, exit code 2, no solve, whatever bounds the
+    argument checks know (here none: ``check_amplitude`` checks nothing)."""
+    import signorini.fem.solve
+    import signorini.pipeline.config
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the solver ran")
+
+    monkeypatch.setattr(signorini.pipeline.config, "check_amplitude", lambda *args, **kwargs: None)
+    monkeypatch.setattr(signorini.fem.solve, "solve_discrete", refuse)
+    code, out, err = run_cli(capsys, "--N", "11", "--A", "1e308")
+    assert code == 2 and out == "", err
+    assert err.startswith("error: --A: 1e+308 is too large: the load vector b") and err.count("\n") == 1, err
+
+
+def test_ctrl_c_prints_one_line_and_writes_nothing(capsys, monkeypatch, tmp_path):
+    import signorini.fem.solve
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(signorini.fem.solve, "solve_discrete", interrupted)
+    code, out, err = run_cli(capsys, "--N", "6", "--vtk", str(tmp_path / "u.vtu"))
+    assert code == 130 and err == f"interrupted; {tmp_path / 'u.vtu'} was not written\n", err
+    assert not list(tmp_path.iterdir())

@@ -14,6 +14,7 @@ import argparse
 import logging
 import sys
 import time
+from pathlib import Path
 
 from signorini.fem.mesh import DEFAULT_DIAGONAL, DIAGONALS
 from signorini.fem.problem import Problem
@@ -65,7 +66,7 @@ def check_arguments(args: argparse.Namespace) -> tuple[Problem, list[str]]:
             problem = Problem(x0=args.x0, R=args.R, A=args.A, c=args.c)
         except ProblemParameterError as err:
             raise ConfigError(f"--x0/--R/--A/--c: {err}") from None
-        check_amplitude("--A", problem.A, problem.R, [args.N])
+        check_amplitude("--A", problem.A, problem.R, [args.N], c=problem.c)
         if args.vtk:
             _check_output("--vtk", args.vtk)
     except ConfigError as err:
@@ -74,19 +75,37 @@ def check_arguments(args: argparse.Namespace) -> tuple[Problem, list[str]]:
 
 
 def _check_output(option: str, path: str) -> None:
-    from pathlib import Path
-
+    """The file ``--vtk`` names can be written (``signorini.vtu.output_target``), checked before the
+    solve, not after it."""
     from signorini.pipeline.config import ConfigError
+    from signorini.vtu import OutputPathError, output_target
 
-    target = Path(path)
-    if target.is_dir():
-        raise ConfigError(f"{option}: {path} is a directory; give a file name, e.g. {target / 'solution.vtu'}")
-    if not target.parent.is_dir():
-        raise ConfigError(f"{option}: the directory {target.parent} does not exist")
+    try:
+        output_target(path)
+    except OutputPathError as err:
+        raise ConfigError(f"{option}: {err}") from None
+
+
+def check_assembled(problem: Problem, disc) -> None:
+    """The assembled system is finite: an amplitude or reaction so large that ``f`` or ``c`` times
+    the mass matrix overflows is refused before the solve (``UsageError``), whatever bounds the
+    argument checks know."""
+    import numpy as np
+
+    if not np.all(np.isfinite(disc.A.data)):
+        raise UsageError(f"--c: {problem.c!r} is too large: the stiffness plus c times the mass matrix overflows")
+    if not np.all(np.isfinite(disc.b)):
+        bad = int(np.count_nonzero(~np.isfinite(disc.b)))
+        raise UsageError(
+            f"--A: {problem.A!r} is too large: the load vector b (the integrals of f = -Δu + cu, proportional "
+            f"to A) has {bad} of {disc.b.size} entries that overflow a double; take a smaller --A"
+        )
 
 
 def solve_command(args: argparse.Namespace) -> int:
     import math
+
+    import numpy as np
 
     from signorini.fem.discrete import build
     from signorini.fem.norms.true import evaluate_named_norms
@@ -98,7 +117,13 @@ def solve_command(args: argparse.Namespace) -> int:
         print(f"error: {err}", file=sys.stderr)
         return 2
     t0 = time.perf_counter()
-    disc = build(problem, args.N, args.diagonal)
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is refused just below, in one line
+        disc = build(problem, args.N, args.diagonal)
+    try:
+        check_assembled(problem, disc)
+    except UsageError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
     t1 = time.perf_counter()
     result = solve_discrete(disc)
     t2 = time.perf_counter()
@@ -121,10 +146,18 @@ def solve_command(args: argparse.Namespace) -> int:
             print(f"error: --norms: {', '.join(bad)} is not a finite number; no error is reported", file=sys.stderr)
             return 1
     if args.vtk:
-        from signorini.vtu import solution_fields, write_vtu
+        from signorini.vtu import OutputPathError, solution_fields, write_vtu
 
-        write_vtu(args.vtk, disc.mesh, solution_fields(problem, disc.mesh, result.u, result.lam, result.active))
-        print(f"wrote {args.vtk}")
+        fields = solution_fields(problem, disc.mesh, result.u, result.lam, result.active)
+        try:
+            written = write_vtu(args.vtk, disc.mesh, fields)
+        except (OSError, OutputPathError) as err:  # changed or full since the check before the solve
+            print(f"error: --vtk: {args.vtk} was not written: {getattr(err, 'strerror', None) or err}", file=sys.stderr)
+            return 1
+        if Path(args.vtk).is_symlink():
+            print(f"wrote {written} (the file the link {args.vtk} points to)")
+        else:
+            print(f"wrote {args.vtk}")
     return 0
 
 
@@ -133,4 +166,8 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(format="%(asctime)s %(name)s: %(message)s", level=logging.WARNING)
     if args.verbose:
         logging.getLogger("signorini").setLevel(logging.INFO)
-    return solve_command(args)
+    try:
+        return solve_command(args)
+    except KeyboardInterrupt:  # Ctrl-C: one line; the .vtu is written atomically, so not at all
+        print(f"interrupted{f'; {args.vtk} was not written' if args.vtk else ''}", file=sys.stderr)
+        return 130

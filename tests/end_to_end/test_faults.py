@@ -64,7 +64,8 @@ def test_an_input_replaced_under_its_consumers_is_not_trusted(built_repo, tmp_pa
     with pytest.raises(StaleInputError, match="computed from another results/smoke/N21/system.npz"):
         check_inputs(["results/smoke/N21/solution.npz"])
     proc = snakemake(repo, "-n", "results/smoke/errors.csv")  # read-only: named, nothing removed
-    assert "solution.npz was computed from another results/smoke/N21/system.npz" in proc.stderr
+    assert "results/smoke/N21/solution.npz" in proc.stderr
+    assert "was computed from another results/smoke/N21/system.npz than the one now on disk" in proc.stderr
     ran = planned(snakemake(repo, "-c2", "results/smoke/errors.csv"))
     assert ("solve", {"scene": "smoke", "N": "21"}) in ran and ("errors", {"scene": "smoke"}) in ran
     assert "discretise" not in {rule for rule, _ in ran}  # the replaced system is valid: it is used
@@ -181,7 +182,8 @@ def test_a_changed_parameter_or_scene_reruns_without_snakemakes_metadata(tiny_bu
     shutil.rmtree(repo / ".snakemake")
     _set_scene(repo, problem={**PROBLEM, "A": 20})
     proc = snakemake(repo, "-n", "--rerun-triggers", "mtime", "--", "results/tiny/eoc.csv")
-    assert "out of date: results/tiny/N11/solution.npz" in proc.stderr and errors.read_text() == before.text
+    assert "results/tiny/N11/system.npz" in proc.stderr and "other parameters" in proc.stderr
+    assert "a run moves them to <name>.stale" in proc.stderr and errors.read_text() == before.text
     proc = snakemake(repo, "-c2", "--rerun-triggers", "mtime", "--", "results/tiny/eoc.csv")
     after = read_errors_csv(errors)
     assert after.header == before.header and after.rows.keys() == before.rows.keys()
@@ -197,8 +199,10 @@ def test_a_changed_parameter_or_scene_reruns_without_snakemakes_metadata(tiny_bu
     proc2 = snakemake(repo, "-c2", "--rerun-triggers", "mtime", "--", "results/tiny/eoc.csv")
     assert list(read_errors_csv(errors).rows) == ["11", "21", "31"]
     for out in (proc, proc2):
-        assert "out of date: results/tiny/errors.csv" in out.stderr and "corrupt" not in out.stderr
+        assert "results/tiny/errors.csv" in out.stderr and "other parameters" in out.stderr
+        assert "moved to <name>.stale" in out.stderr and "corrupt" not in out.stderr
     assert not list((repo / "results").rglob("*.corrupt"))
+    assert (repo / "results/tiny/errors.csv.stale").exists()  # moved aside, never deleted
 
 
 @pytest.mark.slow
@@ -213,7 +217,7 @@ def test_the_papers_tables_follow_a_changed_mesh_list_without_snakemakes_metadat
     shutil.rmtree(repo / ".snakemake")
     _set_scene(repo, N=[11, 21, 31])
     proc = snakemake(repo, "-c2", "--rerun-triggers", "mtime", "--", "all")
-    assert "out of date: " in proc.stderr and "paper_figures/table1.csv holds the rows h = 1/11, 1/21" in proc.stderr
+    assert "paper_figures/table1.csv" in proc.stderr and "(rendered anew)" in proc.stderr
     table1 = read_errors_csv(repo / "paper_figures/table1.csv")
     table2 = read_errors_csv(repo / "paper_figures/table2.csv")
     assert list(table1.rows) == ["1/11", "1/21", "1/31"] and list(table2.rows) == ["1/21", "1/31", "regr.", "theo."]
@@ -275,8 +279,9 @@ def test_read_only_calls_change_nothing_however_spelled(tiny_built, tmp_path):
         proc = snakemake(repo, *args, "--", "results/tiny/eoc.csv", check=False, timeout=900)
         assert _tree(repo) == before, (args, proc.stderr[-3000:])
         if "-n" in args[0] or "dry" in " ".join(args) or args[0] == "--profile":
-            assert "out of date: results/tiny/N11/norms/L4.json" in proc.stderr, (args, proc.stderr[-3000:])
-            assert f"damaged artifact {damaged.relative_to(repo)}" in proc.stderr, args
+            assert "computed by other code" in proc.stderr, (args, proc.stderr[-3000:])
+            assert "a run moves them to <name>.stale" in proc.stderr, (args, proc.stderr[-3000:])
+            assert f"{damaged.relative_to(repo)}: damaged" in proc.stderr, args
 
 
 def non_utf8_locale(tmp_path: Path) -> dict[str, str]:

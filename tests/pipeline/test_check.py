@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import os
 import shutil
 import subprocess
+from pathlib import Path
 
 import pytest
 
@@ -39,23 +41,45 @@ def _git(repo, *args):
     subprocess.run(["git", "-C", str(repo), *args], check=True, capture_output=True)
 
 
+def _render(repo, path: str, text: str, inputs: dict) -> None:
+    """``path`` as a job of the workflow renders it in ``repo`` (sealed, with its inputs' digests)."""
+    from signorini.pipeline.artifacts import atomic_write_text, recording
+
+    cwd = Path.cwd()
+    os.chdir(repo)
+    try:
+        with recording({"rule": "r", "code": "c", "params": {}, "wildcards": {}, "inputs": inputs}):
+            atomic_write_text(path, text)
+    finally:
+        os.chdir(cwd)
+
+
 @pytest.mark.skipif(shutil.which("git") is None, reason="git is not installed")
 def test_main_against_git_head(tmp_path, capsys):
+    from signorini.pipeline.artifacts import content_digest
+
     repo = tmp_path / "repo"
     (repo / "paper_figures").mkdir(parents=True)
+    text = {path: "h,L4\n1/101,5.8746e-04\n" if path.endswith(".csv") else "x\n" for path in all_outputs()}
     for path in all_outputs():
-        (repo / path).write_text("h,L4\n1/101,5.8746e-04\n" if path.endswith(".csv") else "x\n", encoding="utf-8")
+        (repo / path).write_text(text[path], encoding="utf-8")
     _git(repo, "init", "-q")
     _git(repo, "add", ".")
     _git(repo, "-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "outputs")
-    assert main(["--root", str(repo)]) == 2  # no run: results/ holds no scene table
+    assert main(["--root", str(repo)]) == 2  # the committed files, never rendered here
     assert "run `make all` first" in capsys.readouterr().err
     (repo / "results/paper").mkdir(parents=True)
     (repo / "results/paper/errors.csv").write_text("N,h\n", encoding="utf-8")
+    assert main(["--root", str(repo)]) == 2  # a scene table (another run's) does not make them rendered
+    capsys.readouterr()
+    inputs = {"results/paper/errors.csv": content_digest(repo / "results/paper/errors.csv")}
+    for path in all_outputs():
+        _render(repo, path, text[path], inputs)
     assert main(["--root", str(repo)]) == 0
     out = capsys.readouterr().out
     assert "reproduced: 11 of 11 files" in out and out.count("identical") == 11
     (repo / "paper_figures/table1.csv").write_text("h,L4\n1/101,5.8747e-04\n", encoding="utf-8")
+    _render(repo, "paper_figures/table1.csv", "h,L4\n1/101,5.8747e-04\n", inputs)
     (repo / "paper_figures/figure3.png").unlink()
     assert main(["--root", str(repo)]) == 1
     out = capsys.readouterr().out
@@ -64,6 +88,14 @@ def test_main_against_git_head(tmp_path, capsys):
     assert main(["--root", str(repo), "--rtol", "1e-4", "paper_figures/table1.csv"]) == 0
     assert main(["--root", str(repo), "--reference", "nosuchrev"]) == 2
     assert "no revision 'nosuchrev'" in capsys.readouterr().err
+    # the cache changed under the rendered files (another scene, a rebuilt table): not rendered from it
+    (repo / "results/paper/errors.csv").write_text("N,h\n11,0.1\n", encoding="utf-8")
+    assert main(["--root", str(repo), "paper_figures/table2.csv", "paper_figures/table1.md"]) == 2
+    (repo / "results/paper/errors.csv").write_text("N,h\n", encoding="utf-8")
+    (repo / "paper_figures/table1.md").write_text("x\n\n", encoding="utf-8")  # edited after rendering
+    assert main(["--root", str(repo), "paper_figures/table2.csv", "paper_figures/table1.md"]) == 1
+    out = capsys.readouterr().out
+    assert "not rendered" in out and "bytes differ" in out and "table2.csv" in out
 
 
 def test_main_without_git_repository_says_what_to_do(tmp_path, capsys):
@@ -74,6 +106,6 @@ def test_main_without_git_repository_says_what_to_do(tmp_path, capsys):
     (tmp_path / "paper_figures").mkdir()
     ref.mkdir()
     (ref / "table1.csv").write_text("a\n", encoding="utf-8")
-    (tmp_path / "paper_figures/table1.csv").write_text("a\n", encoding="utf-8")
+    _render(tmp_path, "paper_figures/table1.csv", "a\n", {})
     args = ["--root", str(tmp_path), "--reference-dir", str(ref), "paper_figures/table1.csv"]
     assert main(args) == 0

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import copy
 
+import numpy as np
 import pytest
 import yaml
 from helpers import NORMS, PROBLEM, ROOT, SMOKE_N, copy_repo, snakemake
@@ -15,9 +16,13 @@ from signorini.fem.problem import Problem
 from signorini.fem.solve import solve_discrete
 from signorini.pipeline.config import (
     SCENE_NAME_MAX,
+    SUPPORT_CELLS,
     ConfigError,
+    amplitude_ceiling,
     amplitude_floor,
     check_config,
+    energy_ceiling,
+    load_yaml,
     validate_config,
 )
 from signorini.pipeline.config import load_config as read_config
@@ -110,6 +115,141 @@ def test_the_floor_is_where_the_errors_lose_digits():
     assert all(abs(above[n] / A / unit[n] - 1) < 1e-12 for n in names), above
     below = errors(1e-320)
     assert any(abs(below[n] / 1e-320 / unit[n] - 1) > 0.1 for n in names), below
+
+
+def test_an_amplitude_whose_load_vector_overflows_is_refused():
+    """``problem: {A: 1e308}`` gave inf in b; the bound follows R and c."""
+    message = refused(with_smoke(problem={"A": 1e308}))
+    assert message.startswith("scenes.smoke.problem.A: 1e+308 is too large: the right-hand side f"), message
+    assert "overflow" in message and f"need A ≤ {amplitude_ceiling(0.45, 1):.4e}" in message
+    assert amplitude_ceiling(0.1, 1) < amplitude_ceiling(0.45, 1)  # f ~ A R^{-1/2}: a smaller support peaks higher
+    assert amplitude_ceiling(0.45, 1e4) < amplitude_ceiling(0.45, 0)
+
+
+@pytest.mark.parametrize(("R", "c", "N"), [(0.45, 1.0, 11), (0.1, 1.0, 31), (0.45, 1e4, 11)])
+def test_the_amplitude_ceiling_is_where_the_load_vector_overflows(R, c, N):
+    """Computed: just below the ceiling b is finite, the solve is certified and every norm (the
+    paper's, one-sided, a true norm) is a finite number; a tenth above it b holds inf, and the
+    config check refuses it."""
+    from signorini.fem.norms.true import evaluate_named_norms
+
+    ceiling = amplitude_ceiling(R, c)
+    problem = Problem(x0=0.5, R=R, A=ceiling * (1 - 1e-6), c=c)
+    disc = build(problem, N, "sw_ne")
+    assert np.isfinite(disc.b).all() and np.abs(disc.b).max() > 1e300
+    # the true norms' bound of D²u overflows near the free point there: fewer triangles excluded, same value
+    with np.errstate(over="ignore"):
+        errors = evaluate_named_norms(problem, disc.mesh, solve_discrete(disc).u, [*NORMS, "L4plus", "L4_true"])
+    assert all(np.isfinite(value) and value > 0 for value in errors.values()), errors
+    with np.errstate(over="ignore", invalid="ignore"):
+        assert not np.isfinite(build(Problem(x0=0.5, R=R, A=1.1 * ceiling, c=c), N, "sw_ne").b).all()
+    with pytest.raises(ConfigError, match=r"problem\.A: .* is too large"):
+        check_config(with_smoke(N=[N, 2 * N], problem={"x0": 0.5, "R": R, "A": 1.1 * ceiling, "c": c}))
+
+
+def test_conjugate_gradients_bound_the_amplitude_by_the_energy():
+    """The multigrid route (and the theory scene's Ritz projection) computes the energy A²·a(u₁, u₁)
+    as a plain sum: below its ceiling the route solves, a tenth above it CG breaks down; the scene
+    is refused, the direct route keeps the larger bound of the load vector."""
+    from signorini.solvers import NotConvergedError
+
+    ceiling = energy_ceiling(0.45, 1.0)
+    disc = build(Problem(A=0.99 * ceiling), 41, "sw_ne")
+    assert solve_discrete(disc, solver="multigrid").certificate is not None
+    with np.errstate(over="ignore", invalid="ignore"), pytest.raises((NotConvergedError, ValueError)):
+        solve_discrete(build(Problem(A=1.1 * ceiling), 41, "sw_ne"), solver="multigrid")
+    message = refused(with_smoke(solver="multigrid", problem={"A": 1.1 * ceiling}))
+    assert "too large for conjugate gradients" in message and f"need A ≤ {ceiling:.4e}" in message, message
+    check_config(with_smoke(solver="active_set", problem={"A": 1.1 * ceiling}))
+
+
+@pytest.mark.parametrize(
+    ("changes", "fragments"),
+    [
+        ({"problem": {"x0": 0.999, "R": 0.0005}}, ["scenes.smoke.N[0]:", "0.0055 cells", "meshes at N = 6000"]),
+        ({"problem": {"R": 0.1}}, ["scenes.smoke.problem.R:", "1.1 cells", "need R ≥ 0.273 or meshes from N = 30"]),
+        ({"N": [1, 2], "norms": ["L4plus", "L4minus"]}, ["scenes.smoke.N[0]:", "0.45 cells", "N = 7 (R ≥ 3h)"]),
+    ],
+)
+def test_a_support_the_coarsest_mesh_does_not_resolve_is_refused(changes, fragments):
+    """A support smaller than a cell gave L4 = W1inf = 0 for a nonzero u and a crashing eoc job;
+    N = [1, 2] gave L4plus = 0 (no node in the support): R ≥ 3h on the coarsest mesh."""
+    message = refused(with_smoke(**changes))
+    assert all(f in message for f in fragments), message
+
+
+def test_the_support_rule_is_where_the_errors_and_their_one_sided_parts_behave():
+    """Computed: on N = 1 the plus part of the error vanishes (so would its EOC); with the support
+    at the rule's bound, R = 3/N, every error and one-sided part is nonzero and decreases."""
+    from signorini.fem.norms.conventional import evaluate_norms
+
+    names = ["L4", "W1inf", "L4plus", "L4minus"]
+
+    def errors(R: float, N: int) -> dict:
+        problem = Problem(R=R)
+        disc = build(problem, N, "sw_ne")
+        return evaluate_norms(problem, disc.mesh, solve_discrete(disc).u, names)
+
+    assert errors(0.45, 1)["L4plus"] == 0.0
+    coarse, fine = errors(SUPPORT_CELLS / 11, 11), errors(SUPPORT_CELLS / 11, 21)
+    assert all(0 < fine[n] < coarse[n] for n in names), (coarse, fine)
+    check_config(with_smoke(problem={"R": SUPPORT_CELLS / 11}))  # the bound itself passes
+
+
+def test_every_shipped_scene_resolves_its_support():
+    config = shipped()
+    for name, scene in config["scenes"].items():
+        assert scene["problem"]["R"] * min(scene["N"]) >= SUPPORT_CELLS, name
+    validate(config)
+
+
+@pytest.mark.parametrize(
+    ("where", "value", "fragments"),
+    [
+        (("study", "tolerances", 1), float("inf"), ["scenes.work_precision.study.tolerances[1]: inf", "finite"]),
+        (("study", "timing", "spread"), float("nan"), ["scenes.work_precision.study.timing.spread: .nan is not"]),
+        (("problem", "c"), float("nan"), ["scenes.work_precision.problem"]),
+    ],
+)
+def test_nan_and_infinite_tolerances_are_refused_wherever_they_are(where, value, fragments):
+    """NaN passes every bound of the schema (each comparison is false): refused anywhere; a
+    study's tolerances are finite and positive like a solver's."""
+    config = shipped()
+    target = config["scenes"]["work_precision"]
+    for key in where[:-1]:
+        target = target[key]
+    target[where[-1]] = value
+    message = refused(config)
+    assert all(f in message for f in fragments), message
+
+
+def test_an_atlas_columns_certificate_tolerance_is_finite_and_positive():
+    config = shipped()
+    config["scenes"]["stability"]["atlas"]["solvers"]["osqp"]["kkt_tol"] = float("nan")
+    message = refused(config)
+    assert message.startswith("scenes.stability.atlas.solvers.osqp.kkt_tol: nan is not allowed; a tolerance"), message
+
+
+def test_cores_zero_is_refused():
+    from signorini.pipeline.config import check_cores
+
+    with pytest.raises(ConfigError, match=r"^--cores 0: no job could ever run; give at least 1$"):
+        check_cores(0)
+    check_cores(1)
+    check_cores(None)  # --lint, --summary, ...: no cores given
+    check_cores(0, nodes=50)  # --jobs on a cluster: the local cores bound nothing
+
+
+@pytest.mark.parametrize("args", [["-c0"], ["-j0"]])  # make all CORES=0; -j is --cores on this machine
+def test_snakemake_refuses_cores_zero_before_planning(tmp_path, args):
+    """``snakemake -c0`` planned the jobs and then waited for a free core for ever."""
+    copy_repo(tmp_path)
+    proc = snakemake(tmp_path, *args, "--workflow-profile", "none", "results/smoke/N11/system.npz", check=False,
+                     timeout=120)
+    lines = [line for line in (proc.stdout + proc.stderr).splitlines() if line.strip()]
+    assert proc.returncode != 0, lines
+    assert lines[-1] == "config error: --cores 0: no job could ever run; give at least 1", lines
+    assert not (tmp_path / "results").exists()
 
 
 @pytest.mark.parametrize(
@@ -240,7 +380,7 @@ def test_a_yaml_syntax_error_is_named_with_file_and_line(tmp_path, monkeypatch, 
 
     bad = tmp_path / "mine.yaml"
     bad.write_text("scenes:\n  mine:\n    N: [11, 21\n    norms: [L4]\n")
-    with pytest.raises(ConfigError, match=r"mine\.yaml:4:10: expected ',' or '\]'"):
+    with pytest.raises(ConfigError, match=r"mine\.yaml:4:10: (did not find )?expected ',' or '\]'"):
         load_yaml(bad)
     monkeypatch.chdir(ROOT)
     assert main([str(bad)]) == 1 and "mine.yaml:4:10" in capsys.readouterr().err
@@ -249,6 +389,72 @@ def test_a_yaml_syntax_error_is_named_with_file_and_line(tmp_path, monkeypatch, 
     good.write_text(bad.read_text().replace("21\n", "21]\n") + "    solver: active_set\n" + problem)
     scenes = len(load_yaml("workflow/config.yaml")["scenes"]) + 1
     assert main([str(good)]) == 0 and f"({scenes} scenes)" in capsys.readouterr().out
+
+
+DUPLICATE = """\
+scenes:
+  mine:
+    N: [11, 21]
+    norms: [L4]
+  other:
+    N: [11, 21]
+  mine:
+    N: [21, 41]
+"""
+
+
+def test_a_key_given_twice_is_named_with_file_line_and_column(tmp_path, monkeypatch, capsys):
+    """yaml (and Snakemake) kept the last ``mine:`` block silently; nested keys, JSON objects and
+    ``python -m signorini.pipeline.config`` too.  Merge keys (``<<: *anchor``) are not a repeat."""
+    from signorini.pipeline.config import main
+
+    mine = tmp_path / "mine.yaml"
+    mine.write_text(DUPLICATE, encoding="utf-8")
+    twice = r"mine\.yaml:7:3: the key 'mine' is given twice in one mapping \(also at line 2, column 3\)"
+    with pytest.raises(ConfigError, match=twice):
+        load_yaml(mine)
+    nested = tmp_path / "nested.yaml"
+    nested.write_text("scenes:\n  mine:\n    N: [11, 21]\n    N: [21, 41]\n", encoding="utf-8")
+    with pytest.raises(ConfigError, match=r"nested\.yaml:4:5: the key 'N' is given twice"):
+        load_yaml(nested)
+    merged = tmp_path / "merged.yaml"
+    merged.write_text("base: &b {N: [11, 21]}\nscenes:\n  mine:\n    <<: *b\n    N: [21, 41]\n", encoding="utf-8")
+    assert load_yaml(merged)["scenes"]["mine"]["N"] == [21, 41]
+    tabs = tmp_path / "tabs.json"  # JSON that PyYAML cannot read (tab indentation) is read as JSON
+    tabs.write_text('{\n\t"scenes": {\n\t\t"mine": {"N": [11, 21]}\n\t}\n}\n', encoding="utf-8")
+    assert load_yaml(tabs) == {"scenes": {"mine": {"N": [11, 21]}}}
+    tabs.write_text('{\n\t"scenes": {},\n\t"scenes": {}\n}\n', encoding="utf-8")
+    twice = r"tabs\.json(:3:2)?: the key 'scenes' is given twice in one (object|mapping)"
+    with pytest.raises(ConfigError, match=twice):
+        load_yaml(tabs)
+    monkeypatch.chdir(ROOT)
+    assert main([str(mine)]) == 1 and "mine.yaml:7:3: the key 'mine' is given twice" in capsys.readouterr().err
+
+
+def test_snakemake_refuses_a_key_given_twice_in_a_configfile(tmp_path):
+    copy_repo(tmp_path)
+    (tmp_path / "mine.yaml").write_text(DUPLICATE, encoding="utf-8")
+    proc = snakemake(tmp_path, "-n", "results/mine/errors.csv", "--configfile", "mine.yaml", check=False, timeout=120)
+    lines = [line for line in (proc.stdout + proc.stderr).splitlines() if line.strip()]
+    assert proc.returncode != 0 and lines[-1].startswith("config error: mine.yaml:7:3: the key 'mine' is given twice")
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (b"", "empty.yaml: empty (or only comments); a config file holds a mapping of keys"),
+        (b"- a\n- b\n", "empty.yaml: holds a list; a config file holds a mapping of keys"),
+        ("scenes: {}\n".encode("utf-16"), "empty.yaml: UTF-16 text; a config file is UTF-8 text: save it as UTF-8"),
+        (b"\xe9t\xe9: 1\n", "empty.yaml: not UTF-8 text"),
+    ],
+)
+def test_a_config_file_that_is_no_mapping_of_utf8_text_is_one_line(tmp_path, content, message):
+    (tmp_path / "empty.yaml").write_bytes(content)
+    with pytest.raises(ConfigError) as info:
+        load_yaml(tmp_path / "empty.yaml")
+    assert str(info.value).endswith(message) or message in str(info.value), info.value
+    with pytest.raises(ConfigError, match=r"missing\.yaml: no such file"):
+        load_yaml(tmp_path / "missing.yaml")
 
 
 def load_config(path=ROOT / "workflow/config.yaml") -> dict:

@@ -3,7 +3,11 @@ and held against the jobs' requests."""
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import pytest
+from helpers import ROOT
 from helpers import smoke_config as _smoke_config
 
 from signorini.pipeline.config import ConfigError, check_config
@@ -65,3 +69,87 @@ def test_a_mesh_fits_or_not_by_the_route_of_its_scene(solver, fits):
     else:
         with pytest.raises(ConfigError, match=r"N = 4001 needs about 31\.8 GB for its solve job"):
             check_config(config, 24 * 1024)
+
+
+# --- the memory a job can use: the machine, its cgroup, the ulimits ------------------------------
+
+GB = 2**30
+
+
+def fake_cgroups(tmp_path, v2: dict[str, str] | None = None, v1: dict[str, str] | None = None):
+    """A /proc/self and a root with cgroup hierarchies: ``v2``/``v1`` map a cgroup directory (the
+    process's first) to its limit file's text."""
+    proc, root = tmp_path / "proc", tmp_path / "root"
+    proc.mkdir(parents=True)
+    groups, mounts = [], []
+    for version, limits, mount, name in ((2, v2, "sys/fs/cgroup", "memory.max"),
+                                         (1, v1, "sys/fs/cgroup/memory", "memory.limit_in_bytes")):
+        if limits is None:
+            continue
+        groups.append("0::" + next(iter(limits)) if version == 2 else "4:memory:" + next(iter(limits)))
+        kind = "cgroup2 cgroup2 rw" if version == 2 else "cgroup cgroup rw,memory"
+        mounts.append(f"3{version} 23 0:2{version} / /{mount} rw,relatime - {kind}")
+        for directory, text in limits.items():
+            (root / mount / directory.strip("/")).mkdir(parents=True, exist_ok=True)
+            (root / mount / directory.strip("/") / name).write_text(text + "\n", encoding="utf-8")
+    (proc / "cgroup").write_text("\n".join(groups) + "\n", encoding="utf-8")
+    (proc / "mountinfo").write_text("\n".join(mounts) + "\n", encoding="utf-8")
+    return proc, root
+
+
+def test_the_cgroup_limit_is_read_from_v2_and_v1_and_their_parents(tmp_path):
+    from signorini.pipeline.resources import cgroup_mem_mb
+
+    proc, root = fake_cgroups(tmp_path / "a", v2={"/user.slice/job": str(4 * GB), "/user.slice": "max"})
+    assert cgroup_mem_mb(proc, root) == 4096
+    proc, root = fake_cgroups(tmp_path / "b", v2={"/user.slice/job": "max", "/user.slice": str(3 * GB)})
+    assert cgroup_mem_mb(proc, root) == 3072  # a parent's limit bounds the child
+    proc, root = fake_cgroups(tmp_path / "c", v1={"/docker/abc": str(2 * GB), "/": "9223372036854771712"})
+    assert cgroup_mem_mb(proc, root) == 2048
+    proc, root = fake_cgroups(tmp_path / "d", v2={"/": "max"})
+    assert cgroup_mem_mb(proc, root) is None
+    assert cgroup_mem_mb(tmp_path / "none", tmp_path) is None  # no /proc: no limit known
+
+
+def test_the_memory_a_job_can_use_is_the_smallest_limit_and_says_which(tmp_path):
+    import resource
+
+    from signorini.pipeline.resources import MemoryLimit, physical_mem_mb, usable_memory
+
+    machine = physical_mem_mb()
+    proc, root = fake_cgroups(tmp_path, v2={"/job": str(machine // 2 * 2**20)})
+    unlimited = lambda which: (resource.RLIM_INFINITY, resource.RLIM_INFINITY)  # noqa: E731
+    ulimit_v = lambda which: (machine // 4 * 2**20 if which == resource.RLIMIT_AS else -1, -1)  # noqa: E731
+    assert usable_memory(proc=tmp_path / "none", root=tmp_path, getrlimit=unlimited) == (machine, "of this machine")
+    assert usable_memory(proc=proc, root=root, getrlimit=unlimited) == MemoryLimit(machine // 2, "of the cgroup limit")
+    assert usable_memory(proc=proc, root=root, getrlimit=ulimit_v) == MemoryLimit(machine // 4, "of ulimit -v")
+    # all jobs together: a ulimit bounds each process, not their sum
+    assert usable_memory(False, proc=proc, root=root, getrlimit=ulimit_v).source == "of the cgroup limit"
+
+
+def test_a_mesh_beyond_a_cgroup_limit_is_refused_naming_it(tmp_path, monkeypatch):
+    """A limit below the physical memory used to be unseen: the job died with a bare MemoryError."""
+    from functools import partial
+
+    from signorini.pipeline import resources
+
+    proc, root = fake_cgroups(tmp_path, v2={"/job": str(2 * GB)})
+    monkeypatch.setattr(resources, "usable_memory", partial(resources.usable_memory, proc=proc, root=root))
+    check_config(_smoke_config([11, 401]))
+    with pytest.raises(ConfigError, match=r"N\[1\]: N = 1001 needs about 2\.4 GB .* more than the 2\.0 GB of the "
+                       r"cgroup limit$"):
+        check_config(_smoke_config([11, 1001]))
+
+
+def test_a_mesh_beyond_ulimit_v_is_refused_naming_it():
+    """For real: the shipped config under ``ulimit -v 4000000`` (3.8 GB); its fine scene's N = 4001
+    needs 8.3 GB."""
+    from signorini.pipeline.resources import usable_memory
+
+    if usable_memory(False).mb < 8 * 1024:
+        pytest.skip("this machine (or its cgroup) has less than 8 GB: the limit would be its own")
+    command = ["bash", "-c", 'ulimit -v 4000000 && exec "$0" -m signorini.pipeline.config', sys.executable]
+    proc = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 1, proc.stderr
+    assert proc.stderr.strip().endswith("N = 4001 needs about 8.3 GB for its solve_multigrid job (estimate from the "
+                                        "peaks measured at N = 2001), more than the 3.8 GB of ulimit -v"), proc.stderr

@@ -43,6 +43,88 @@ def test_unknown_or_mistyped_solver_options_are_refused(solver, options, message
     check_config(config)
 
 
+NAN, INF = float("nan"), float("inf")
+
+
+@pytest.mark.parametrize(
+    ("solver", "options", "message"),
+    [
+        ("active_set", {"max_iter": -1}, "max_iter: -1 is not allowed; an iteration cap is at least 1"),
+        ("active_set", {"max_iter": 0}, "max_iter: 0 is not allowed; an iteration cap is at least 1"),
+        ("active_set", {"kkt_tol": NAN}, "kkt_tol: nan is not allowed; a tolerance is a finite number > 0"),
+        ("active_set", {"kkt_tol": INF}, "kkt_tol: inf is not allowed; a tolerance"),
+        ("active_set", {"kkt_tol": 0.0}, "kkt_tol: 0.0 is not allowed; a tolerance"),
+        ("auto", {"kkt_tol": -1e-10}, "kkt_tol: -1e-10 is not allowed; a tolerance"),
+        ("multigrid", {"max_cg_iter": 0}, "max_cg_iter: 0 is not allowed; an iteration cap"),
+        ("multigrid", {"inner_rtol": NAN}, "inner_rtol: nan is not allowed; a tolerance"),
+        ("multigrid", {"tol": 1e-6}, "tol: tol = 1e-06 is larger than inner_rtol = 1e-08"),
+        ("cvxpy", {"qp_solver": "OSQP", "tol": NAN}, "tol: nan is not allowed; a tolerance"),
+        ("cvxpy_osqp", {"max_iter": 0}, "max_iter: 0 is not allowed; an iteration cap"),
+        ("cvxpy_osqp", {"cg_max_iter": 0}, "cg_max_iter: 0 is not allowed; an iteration cap"),
+        ("cvxpy_osqp", {"eps_abs": INF}, "eps_abs: inf is not allowed; a tolerance"),
+        ("cvxpy_osqp", {"polish_refine_iter": -1}, "polish_refine_iter: -1 is not allowed; a number of refinement"),
+        ("cvxpy_osqp", {"time_limit": 0.0}, "time_limit: 0.0 is not allowed; a time limit is a number of seconds > 0"),
+        ("cvxpy_osqp", {"rho": NAN}, "rho: nan is not a number"),
+        ("cvxpy_scs", {"max_iters": 0}, "max_iters: 0 is not allowed; an iteration cap"),
+        ("cvxpy_scs", {"time_limit_secs": INF}, "time_limit_secs: inf is not allowed; a time limit is a finite"),
+        ("cvxpy_clarabel", {"max_iter": -1}, "max_iter: -1 is not allowed; an iteration cap"),
+        ("cvxpy_clarabel", {"equilibrate_max_iter": -1}, "equilibrate_max_iter: -1 is not allowed; a number of"),
+        ("cvxpy_clarabel", {"tol_gap_rel": NAN}, "tol_gap_rel: nan is not allowed; a tolerance"),
+    ],
+)
+def test_caps_and_tolerances_a_solver_cannot_use_are_refused(solver, options, message):
+    """``max_iter: -1`` failed in the solve job ("did not repeat within max_iter=-1 iterations"),
+    ``kkt_tol: .nan`` failed its KKT certificate with every residual 0, ``kkt_tol: .inf`` certified
+    anything: every route's iteration caps are ≥ 1, its tolerances finite and > 0."""
+    config = load_config(ROOT / "workflow/config.yaml")
+    config["scenes"]["smoke"].update(solver=solver, solver_options=options)
+    with pytest.raises(ConfigError) as info:
+        check_config(config)
+    assert str(info.value).startswith(f"scenes.smoke.solver_options.{message}"), info.value
+
+
+@pytest.mark.parametrize(
+    ("solver", "options"),
+    [
+        ("active_set", {"max_iter": 1, "kkt_tol": 1e-300}),
+        ("multigrid", {"tol": 1e-9, "inner_rtol": 1e-9, "max_cg_iter": 1}),
+        ("cvxpy_osqp", {"polish_refine_iter": 0, "time_limit": INF}),  # 0 switches refinement off; no time limit
+        ("cvxpy_clarabel", {"equilibrate_max_iter": 0, "iterative_refinement_max_iter": 0, "time_limit": 60.0}),
+    ],
+)
+def test_caps_and_tolerances_at_their_bounds_pass(solver, options):
+    """What the solvers accept: a cap of 1, a tiny tolerance, 0 refinement steps; the solve of N = 11
+    runs with them (a certificate, or a named failure to converge: not a refused option)."""
+    from signorini.fem.discrete import build
+    from signorini.fem.problem import Problem
+    from signorini.fem.solve import solve_discrete
+    from signorini.solvers import KKTError, NotConvergedError
+
+    config = load_config(ROOT / "workflow/config.yaml")
+    config["scenes"]["smoke"].update(solver=solver, solver_options=options)
+    check_config(config)
+    try:
+        solve_discrete(build(Problem(), 11, "sw_ne"), solver=solver, **options)
+    except (NotConvergedError, KKTError) as err:  # e.g. one Newton step is not enough: a result, not a usage error
+        assert "not allowed" not in str(err) and "must be" not in str(err)
+
+
+def test_study_configurations_and_atlas_columns_pass_the_same_checks():
+    """A work-precision configuration's and an atlas column's options go through the same checks."""
+    from signorini.studies.stability.atlas import AtlasConfigError, check_atlases
+    from signorini.studies.work_precision.study import StudyConfigError, study_configs
+
+    config = load_config(ROOT / "workflow/config.yaml")
+    study = config["scenes"]["work_precision"]["study"]
+    study["configs"]["osqp"]["options"] = {"max_iter": 0}
+    with pytest.raises(StudyConfigError, match=r"study\.configs\.osqp\.options\.max_iter: 0 is not allowed"):
+        study_configs(study, installed=("OSQP",))
+    atlas = config["scenes"]["stability"]["atlas"]
+    atlas["solvers"]["multigrid"]["options"] = {"kkt_tol": NAN}
+    with pytest.raises(AtlasConfigError, match=r"atlas\.solvers\.multigrid\.options\.kkt_tol: nan is not allowed"):
+        check_atlases(config)
+
+
 def test_the_option_tables_match_the_installed_qp_solvers():
     """The config check knows OSQP's and SCS's settings without importing them: the tables must be
     what the installed packages accept (a new release with other settings fails here)."""

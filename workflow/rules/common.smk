@@ -30,7 +30,13 @@ from signorini.published import FIGURE3_NORMS, TABLE1_NORMS, TABLE2_NORMS
 from signorini.pipeline import paths, resources
 from signorini.pipeline.artifacts import code_digest
 from signorini.pipeline.codedeps import ImportCache, code_inputs
-from signorini.pipeline.config import ConfigError, check_config, one_line_errors
+from signorini.pipeline.config import (
+    ConfigError,
+    check_config,
+    check_cores,
+    check_norm_name,
+    one_line_errors,
+)
 from signorini.studies.stability import atlas as stab_atlas
 from signorini.studies.work_precision import study as wp_study
 
@@ -59,15 +65,20 @@ def slurm_node(workflow):
 
 # integer N, norm names of the grammar, admissible problem parameters; atlas blocks (case names,
 # groups, problems, solver columns); study blocks (reuse of the source scene's artifacts): one line
-_mem_limit = getattr(workflow, "global_resources", {}).get(
-    "mem_mb"
-)  # --resources / profile
+_mem_limit = resources.given_mem_mb(workflow)  # --resources / profile, else None
 with one_line_errors(stab_atlas.AtlasConfigError, wp_study.StudyConfigError):
-    check_config(config, getattr(_mem_limit, "value", _mem_limit))
+    # --cores 0 on this machine: Snakemake would plan, then wait for a free core for ever
+    check_cores(
+        workflow.resource_settings.cores, workflow.global_resources["_nodes"].value
+    )
+    check_config(config, _mem_limit)
     stab_atlas.check_atlases(config)
     for _name, _scene in config["scenes"].items():
         if "study" in _scene:
             wp_study.check_study(config["scenes"], _name)
+# without a mem_mb of the user's, the scheduler holds the jobs' mem_mb requests against the
+# memory of this machine (or its cgroup): two large jobs never run side by side
+patches.bound_scheduler_memory(workflow, resources.usable_memory(per_process=False).mb)
 
 
 # Through Slurm, every scene job's memory and run-time request must fit the largest node of the
@@ -75,7 +86,7 @@ with one_line_errors(stab_atlas.AtlasConfigError, wp_study.StudyConfigError):
 # first submission, not left pending for ever.
 onstart:
     if (node := slurm_node(workflow)) is not None:
-        check_config(config, getattr(_mem_limit, "value", _mem_limit), node=node)
+        check_config(config, _mem_limit, node=node)
 
 
 wildcard_constraints:
@@ -101,21 +112,28 @@ FIG = config["figures_scene"]  # the scene paper_figures/ is rendered from
 # a mesh's jobs on a cluster (discretise, solve, its norms): one job group, named as in the
 # slurm profile's `groups` (group names of the command line are not known while parsing)
 MESH_GROUP = "mesh"
-THEORY = "theory"  # the scene rendered into paper_figures/theory*
+THEORY = paths.THEORY_SCENE  # the scene rendered into paper_figures/theory*
 FINE = "fine"  # the scene rendered into paper_figures/table{1,2}_fine.*
 WP = "work_precision"  # the scene rendered into paper_figures/work_precision*, cost_of_accuracy*
 STAB = "stability"  # the scene rendered into paper_figures/stability.*
 
 
 def scene_of(wildcards):
-    """The config block of the job's scene (schema defaults filled in)."""
+    """The config block of the job's scene (schema defaults filled in).  A job of one norm (a
+    target's norm need not be in the scene's list) has its norm checked as the config check
+    checks the scenes' norms (the grammar, one spelling), and refused when its exponent is so
+    large that the evaluation would overflow: a ConfigError or UnknownNormError, one line on the
+    console (snakemake_logger_plugin_signorini.input_error_line)."""
     name = wildcards if isinstance(wildcards, str) else wildcards.scene
-    try:
-        return config["scenes"][name]
-    except KeyError:
+    if name not in config["scenes"]:
         raise ConfigError(
-            f"unknown scene {name!r}; configured: {sorted(config['scenes'])}"
-        ) from None
+            f"unknown scene {name!r}; configured: {', '.join(sorted(config['scenes']))} (a scene of "
+            "your own goes into a config file passed with --configfile, docs/scenes.md)"
+        )
+    norm = getattr(wildcards, "norm", None)
+    if norm is not None:  # the grammar, one spelling, an exponent a double can hold
+        check_norm_name("norm", norm)
+    return config["scenes"][name]
 
 
 def scene_param(key):
@@ -141,14 +159,20 @@ def code(script):
 
 
 def reported(outputs, caption, category, subcategory=None):
-    """{name: path} marked for the Snakemake report, captioned by workflow/report/<caption>.rst."""
+    """{name: path} marked for the Snakemake report, captioned by workflow/report/<caption>.rst.
+    Flagged update: a rendered (committed) output is not removed before its job runs and is
+    restored when the job fails, so a run never loses a committed file."""
+    # Snakemake's parser would read `report(` opening a line as its keyword
+    in_report = report
     return {
-        name: report(
-            path,
-            caption=f"../report/{caption}.rst",
-            category=category,
-            subcategory=subcategory,
-            labels={"file": Path(path).name},
+        name: update(
+            in_report(
+                path,
+                caption=f"../report/{caption}.rst",
+                category=category,
+                subcategory=subcategory,
+                labels={"file": Path(path).name},
+            )
         )
         for name, path in outputs.items()
     }

@@ -3,6 +3,8 @@
 # files it offers only as downloads). A page renders the file as it is: its source is a parameter
 # with its digest (an edited source reruns the page), not an input, so that rendering the
 # committed findings of a study never recomputes the study. Not part of any study's target.
+# A page's labels are its source file's name and view "page" (report_lib.page_labels): the
+# report's menu and search list the page and the file's download as two rows.
 from signorini.studies import report as report_lib
 
 # page: (caption in workflow/report/, category, subcategory), as the rule that writes its source
@@ -34,7 +36,7 @@ for _page, (_caption, _category, _subcategory) in REPORT_PAGES.items():
                 caption=f"../report/{_caption}.rst",
                 category=_category,
                 subcategory=_subcategory,
-                labels={"file": Path(_source).name},
+                labels=report_lib.page_labels(Path(_source).name),
             ),
         log:
             paths.log("scene", f"report_{_page}", scene="report"),
@@ -58,7 +60,7 @@ rule report_scene:
             caption="../report/errors.rst",
             category="Scenes",
             subcategory="{scene}",
-            labels={"scene": "{scene}", "file": "errors and EOCs"},
+            labels=report_lib.page_labels("errors and EOCs", scene="{scene}"),
         ),
     log:
         paths.log("scene", "report_scene"),
@@ -89,7 +91,7 @@ rule report_contents:
             paths.REPORT_CONTENTS,
             caption="../report/contents.rst",
             category="Contents",
-            labels={"file": "contents"},
+            labels=report_lib.page_labels("contents"),
         ),
     log:
         paths.log("scene", "report_contents", scene="report"),

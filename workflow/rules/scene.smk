@@ -130,8 +130,8 @@ for _scene in config["scenes"]:
         workflow.ruleorder(NORMS_RULE.format(_scene), "norm")
         # Snakemake's code trigger compares a rule's source text, here the script line, which
         # differs from norm's only by its indentation: the same script, so the same code
-        workflow.get_rule(NORMS_RULE.format(_scene)).run_func_src = (
-            workflow.get_rule("norm").run_func_src
+        patches.share_code_source(
+            workflow.get_rule(NORMS_RULE.format(_scene)), workflow.get_rule("norm")
         )
 
 

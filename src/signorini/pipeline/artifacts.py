@@ -13,6 +13,12 @@ modules it imports, read at job start), the parameters that define it and the co
 the current code, and the input digests with the current inputs, before planning
 (``signorini.pipeline.integrity``); a job refuses an input computed from other inputs than the ones
 now on disk (``signorini.pipeline.joblog``).
+
+Files that cannot carry a checksum of their own (tables, Markdown, figures) get a *seal* when a
+workflow job writes them: a checksummed JSON record under ``results/.seals/`` holding the SHA-256
+of the file's bytes and the job's provenance (``seal_of``, ``verify_seal``).  An edited table (a
+flipped bit, a spreadsheet's round trip) then fails its seal instead of being read as data, and a
+rendered output says what it was rendered from.
 """
 
 from __future__ import annotations
@@ -24,15 +30,20 @@ import os
 import tempfile
 import zipfile
 from collections.abc import Callable, Iterable, Iterator, Mapping
+from functools import partial
 from pathlib import Path
 
 import numpy as np
+
+from signorini.pipeline.paths import FIGDIR, RESULTS, SEALS
 
 
 class CorruptArtifactError(RuntimeError):
     """A cached artifact is unreadable, truncated or fails its checksum."""
 
 
+# what reading a damaged zip archive raises (a flipped bit in a header can name an unknown compression)
+_ARCHIVE_ERRORS = (OSError, ValueError, zipfile.BadZipFile, EOFError, UnicodeDecodeError, NotImplementedError)
 _PROVENANCE: dict | None = None  # of the running job, recorded in every artifact it writes
 
 
@@ -63,8 +74,11 @@ def npz_provenance(arrays: Mapping[str, np.ndarray]) -> dict | None:
 
 
 def provenance_of(path: str | os.PathLike) -> dict | None:
-    """The provenance an artifact records (None for one written outside a workflow job)."""
+    """The provenance an artifact records (None for one written outside a workflow job): an
+    archive's or JSON record's own, any other file's in its seal."""
     path = Path(path)
+    if needs_seal(path):
+        return (seal_of(path) or {}).get("_provenance")
     if path.suffix == ".npz":
         try:  # only this member is read: the arrays may be large
             with np.load(path, allow_pickle=False) as data:
@@ -87,7 +101,7 @@ def content_digest(path: str | os.PathLike) -> str:
             stored = json.loads(path.read_text(encoding="utf-8")).get("_checksum")
             if isinstance(stored, str):
                 return stored
-        return hashlib.sha256(path.read_bytes()).hexdigest()
+        return file_digest(path)
     except (OSError, ValueError, AttributeError, zipfile.BadZipFile, EOFError) as err:
         raise CorruptArtifactError(f"{path}: unreadable ({err})") from err
 
@@ -114,6 +128,70 @@ def _umask() -> int:
     return mask
 
 
+_SEALED_SUFFIXES = (".npz", ".json")  # these carry their checksum and provenance themselves
+_UNSEALED_SUFFIXES = (".tsv", ".log")  # written by Snakemake itself: benchmark files, logs
+
+
+def seal_path(path: str | os.PathLike, root: str | os.PathLike = ".") -> Path:
+    """Where the seal of ``path`` lives: ``<root>/results/.seals/<path relative to root>.json``
+    (``root``: the directory the workflow runs in; a path outside it is named by the SHA-256 of its
+    absolute path)."""
+    where = os.path.abspath(os.path.join(root, path))
+    rel = os.path.relpath(where, os.path.abspath(root))
+    if rel.startswith(os.pardir):
+        rel = hashlib.sha256(where.encode()).hexdigest()
+    return Path(root) / SEALS / f"{rel}.json"
+
+
+def file_digest(path: str | os.PathLike, chunk: int = 1 << 20) -> str:
+    """SHA-256 of a file's bytes, read in chunks (any size in constant memory)."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(partial(fh.read, chunk), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def needs_seal(path: str | os.PathLike) -> bool:
+    """Whether ``path`` is a file kind that needs a seal to be vouched for (not ``.npz``/``.json``)."""
+    return Path(path).suffix not in _SEALED_SUFFIXES
+
+
+def is_sealed_kind(path: str | os.PathLike) -> bool:
+    """Whether a job's output at ``path`` is sealed when written: a file of the cache or a rendered
+    output (``results/``, ``paper_figures/``) that carries no checksum of its own."""
+    where = Path(os.path.abspath(path))
+    if not needs_seal(path) or where.suffix in _UNSEALED_SUFFIXES:
+        return False
+    return any(where.is_relative_to(Path(os.path.abspath(d))) for d in (RESULTS, FIGDIR))
+
+
+def seal_of(path: str | os.PathLike, root: str | os.PathLike = ".") -> dict | None:
+    """The seal of ``path`` (``{"sha256": ..., "_provenance": ...}``), None when it has none; a
+    damaged seal raises ``CorruptArtifactError``."""
+    where = seal_path(path, root)
+    return load_json(where) if where.is_file() else None
+
+
+def verify_seal(path: str | os.PathLike, root: str | os.PathLike = ".") -> str | None:
+    """Why ``path`` is not what its job wrote (None when its bytes match its seal): no seal, a
+    damaged seal, or other bytes (edited after it was written)."""
+    try:
+        seal = seal_of(path, root)
+    except CorruptArtifactError as err:
+        return f"its seal is damaged ({err})"
+    if seal is None:
+        return "no record of the job that wrote it"
+    if seal.get("sha256") != file_digest(Path(root) / path):
+        return "its bytes differ from what its job wrote (edited or damaged)"
+    return None
+
+
+def _write_seal(path: Path) -> None:
+    if _PROVENANCE is not None and is_sealed_kind(path):
+        save_json(seal_path(path), {"path": str(path), "sha256": file_digest(path)})
+
+
 def _atomic_write(path: str | os.PathLike, write) -> None:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -128,6 +206,7 @@ def _atomic_write(path: str | os.PathLike, write) -> None:
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+    _write_seal(path)
 
 
 def _digest(arrays: dict[str, np.ndarray]) -> str:
@@ -155,7 +234,7 @@ def load_npz(path: str | os.PathLike) -> dict[str, np.ndarray]:
     try:
         with np.load(path, allow_pickle=False) as data:
             arrays = {k: data[k] for k in data.files}
-    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
+    except _ARCHIVE_ERRORS as err:
         raise CorruptArtifactError(f"{path}: unreadable archive ({err})") from err
     stored = arrays.pop("_checksum", None)
     if stored is None:
@@ -163,6 +242,41 @@ def load_npz(path: str | os.PathLike) -> dict[str, np.ndarray]:
     if stored.tobytes().decode() != _digest(arrays):
         raise CorruptArtifactError(f"{path}: checksum mismatch (truncated or modified)")
     return arrays
+
+
+def _stream_member(h, archive: zipfile.ZipFile, name: str, chunk: int) -> None:
+    """Hash one ``.npy`` member of an archive as ``_digest`` hashes its array, streaming its data."""
+    with archive.open(name) as fh:
+        fmt = np.lib.format
+        major = fmt.read_magic(fh)[0]
+        header = fmt.read_array_header_1_0 if major == 1 else fmt.read_array_header_2_0
+        shape, fortran, dtype = header(fh)
+        h.update(name[: -len(".npy")].encode())
+        h.update(str(dtype).encode())
+        h.update(str(shape or (1,)).encode())  # np.ascontiguousarray makes a 0-d array 1-d
+        if fortran and len(shape) > 1:  # stored in column order: the digest is of the row-order bytes
+            h.update(np.ascontiguousarray(np.lib.format.read_array(archive.open(name))).tobytes())
+            return
+        for block in iter(partial(fh.read, chunk), b""):
+            h.update(block)
+
+
+def verify_npz(path: str | os.PathLike, chunk: int = 1 << 22) -> None:
+    """Verify an archive's checksum reading its arrays in chunks (memory independent of its size);
+    raises ``CorruptArtifactError`` as ``load_npz`` does."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            names = sorted(n for n in archive.namelist() if n.endswith(".npy"))
+            if "_checksum.npy" not in names:
+                raise CorruptArtifactError(f"{path}: no checksum (edited or damaged)")
+            stored = np.lib.format.read_array(archive.open("_checksum.npy")).tobytes().decode()
+            h = hashlib.sha256()
+            for name in (n for n in names if n != "_checksum.npy"):
+                _stream_member(h, archive, name, chunk)
+    except _ARCHIVE_ERRORS as err:
+        raise CorruptArtifactError(f"{path}: unreadable archive ({err})") from err
+    if stored != h.hexdigest():
+        raise CorruptArtifactError(f"{path}: checksum mismatch (truncated or modified)")
 
 
 def _json_digest(data: dict) -> str:

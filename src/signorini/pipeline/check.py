@@ -8,8 +8,14 @@ file: ``identical`` (byte for byte), or for tables (CSV, Markdown, LaTeX) how ma
 numbers differ and the largest relative difference, for figures (PDF, PNG) that their bytes
 differ.  A table whose text agrees and whose numbers agree within ``--rtol`` counts as matched.
 
-Exit status: 0 every file matched; 1 a file differs or is missing; 2 nothing could be compared
-(no git repository or revision, no run found).
+A file counts as reproduced only if it was rendered on this machine from the current cache: its
+seal (``signorini.pipeline.artifacts``, written by the job that rendered it) holds its bytes, and
+every input the job read is on disk with the content it had then.  The committed files
+themselves, or files rendered from another scene or an older cache, are named as *not rendered
+here*.
+
+Exit status: 0 every file matched and was rendered here; 1 a file differs, is missing or was not
+rendered here; 2 nothing could be compared (no git repository or revision, nothing rendered here).
 """
 
 from __future__ import annotations
@@ -25,7 +31,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from signorini.pipeline.paths import FIGURES, PATHS, TARGETS
+from signorini.pipeline.paths import FIGURES, TARGETS
 
 # numbers as the tables write them: 5.8746·10⁻⁴ (Markdown), $5.8746 \cdot 10^{-4}$ (LaTeX), 1.9968, 2.0e-05
 _SUPERSCRIPT = str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")
@@ -41,7 +47,8 @@ class NoReference(RuntimeError):
 @dataclass(frozen=True)
 class Comparison:
     """One file: ``status`` is ``identical``, ``matched`` (text equal, numbers within rtol),
-    ``differs``, ``missing`` (not built) or ``no reference`` (not committed)."""
+    ``differs``, ``missing`` (not built), ``not rendered`` (not by a run here from the current
+    cache) or ``no reference`` (not committed)."""
 
     path: str
     status: str
@@ -168,14 +175,30 @@ def report(results: Sequence[Comparison], source: str) -> str:
     lines += [f"  {r.path:<{width}}  {r.status:<12}  {r.detail}".rstrip() for r in results]
     good = sum(r.ok for r in results)
     verdict = "reproduced" if good == len(results) else "NOT reproduced"
-    lines.append(f"{verdict}: {good} of {len(results)} files match the committed ones")
+    lines.append(f"{verdict}: {good} of {len(results)} files were rendered here and match the committed ones")
     return "\n".join(lines)
 
 
-def _ran(root: Path) -> bool:
-    """Whether a run of ``all`` left its scene tables in ``results/`` (else paper_figures/ holds
-    the committed files themselves, and comparing them proves nothing)."""
-    return any((root / PATHS["errors_csv"].format(scene=p.name)).exists() for p in (root / "results").glob("*/"))
+def not_rendered_here(root: Path, path: str) -> str | None:
+    """Why ``path`` (relative to ``root``) was not rendered on this machine from the current cache
+    (None when it was): no seal, other bytes than its job wrote, or an input now on disk with other
+    content than the job read (another scene, a rebuilt cache) or gone."""
+    from signorini.pipeline.artifacts import CorruptArtifactError, content_digest, seal_of, verify_seal
+
+    if not (root / path).is_file():
+        return None  # a missing file is reported as missing
+    if reason := verify_seal(path, root):
+        return {"no record of the job that wrote it": "not rendered by a run here (the committed file?)"}.get(
+            reason, reason
+        )
+    inputs = ((seal_of(path, root) or {}).get("_provenance") or {}).get("inputs") or {}
+    for source, recorded in inputs.items():
+        try:
+            if content_digest(root / source) != recorded:
+                return f"rendered from another {source} than the cache holds now"
+        except (CorruptArtifactError, FileNotFoundError):
+            return f"rendered from {source}, which the cache no longer holds intact"
+    return None
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -195,10 +218,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     except NoReference as err:
         print(f"check: cannot read the committed files: {err}; pass --reference-dir DIR with a copy", file=sys.stderr)
         return 2
-    if not args.files and not _ran(root):
-        print("check: no run found (results/ holds no scene tables): run `make all` first", file=sys.stderr)
+    files = args.files or all_outputs()
+    elsewhere = {path: why for path in files if (why := not_rendered_here(root, path))}
+    if len(elsewhere) == len(files):
+        print(
+            "check: nothing in paper_figures/ was rendered on this machine from the current cache (it holds the "
+            "committed files): run `make all` first",
+            file=sys.stderr,
+        )
         return 2
-    results = compare(root, args.files or all_outputs(), reference, args.rtol)
+    results = compare(root, files, reference, args.rtol)
+    results = [
+        Comparison(r.path, "not rendered", f"{elsewhere[r.path]}; run `make all`") if r.path in elsewhere else r
+        for r in results
+    ]
     print(report(results, source))
     return 0 if all(r.ok for r in results) else 1
 

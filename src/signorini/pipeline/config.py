@@ -9,10 +9,12 @@ names the offending field, e.g. ``scenes.paper.N[1]: 201.0 is not an integer``.
 from __future__ import annotations
 
 import copy
+import math
 import os
 import sys
 from collections.abc import Mapping, Sequence
 from contextlib import contextmanager
+from functools import cache
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -39,20 +41,94 @@ def one_line_errors(*kinds: type[Exception]):
 
 def load_yaml(path: str | Path) -> dict:
     """A config file's content; a syntax error is named with file, line and column (Snakemake
-    itself only says that a config file is not valid YAML)."""
+    itself only says that a config file is not valid YAML), and so is a key given twice in one
+    mapping (yaml and Snakemake keep the last block silently).  JSON that is no YAML for PyYAML
+    (tabs) is read as JSON.  A missing file, one that is not UTF-8, empty, or not a mapping: one
+    line each."""
     import yaml
 
     try:
-        data = yaml.safe_load(Path(path).read_text(encoding="utf-8"))
+        raw = Path(path).read_bytes()
+    except FileNotFoundError:
+        raise ConfigError(f"{path}: no such file; give the path of a YAML or JSON config file") from None
+    except IsADirectoryError:
+        raise ConfigError(f"{path}: a directory, not a config file; give a YAML or JSON file") from None
+    except OSError as err:
+        raise ConfigError(f"{path}: cannot be read ({err.strerror or err}); give a readable config file") from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        utf16 = raw[:2] in (b"\xff\xfe", b"\xfe\xff")  # a byte-order mark: what editors on Windows write
+        kind = "UTF-16 text" if utf16 else "not UTF-8 text"
+        raise ConfigError(f"{path}: {kind}; a config file is UTF-8 text: save it as UTF-8") from None
+    try:
+        data = yaml.load(text, Loader=_unique_key_loader())
     except yaml.MarkedYAMLError as err:
-        mark = err.problem_mark or err.context_mark
-        where = f"{path}:{mark.line + 1}:{mark.column + 1}" if mark else str(path)
-        raise ConfigError(f"{where}: {err.problem or err.context}") from None
-    except (OSError, yaml.YAMLError) as err:
+        data = _json_or_raise(path, text, err)
+    except yaml.YAMLError as err:
         raise ConfigError(f"{path}: {err}") from None
     if not isinstance(data, dict):
-        raise ConfigError(f"{path}: a config file holds a mapping of keys (scenes, figures_scene)")
+        held = {type(None): "empty (or only comments)", list: "holds a list", str: "holds a text"}
+        what = held.get(type(data), f"holds {data!r}")
+        raise ConfigError(f"{path}: {what}; a config file holds a mapping of keys (scenes, figures_scene)")
     return data
+
+
+@cache
+def _unique_key_loader():
+    """yaml's SafeLoader refusing a key given twice in one mapping, with the line of each (on
+    libyaml's parser where PyYAML has it: a tenth of the pure-Python parser's time, which a
+    workflow start pays for every config and schema file)."""
+    import yaml
+
+    class UniqueKeyLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
+        def construct_mapping(self, node, deep=False):
+            if isinstance(node, yaml.MappingNode):
+                seen: dict = {}
+                for key_node, _ in node.value:
+                    if key_node.tag == "tag:yaml.org,2002:merge":
+                        continue  # `<<: *anchor` merges keys on purpose
+                    key = self.construct_object(key_node, deep=True)
+                    try:
+                        first = seen.setdefault(key, key_node.start_mark)
+                    except TypeError:
+                        continue  # an unhashable key: yaml's own error follows
+                    if first is not key_node.start_mark:
+                        error = yaml.constructor.ConstructorError(
+                            None, None,
+                            f"the key {key!r} is given twice in one mapping (also at line {first.line + 1}, column "
+                            f"{first.column + 1}), and only the last would count; give each key once (merge the "
+                            "two blocks)",
+                            key_node.start_mark,
+                        )
+                        error.duplicate = True
+                        raise error
+            return super().construct_mapping(node, deep)
+
+    return UniqueKeyLoader
+
+
+def _json_or_raise(path: str | Path, text: str, err) -> dict:
+    """The content of a JSON file PyYAML cannot read (tabs), or the YAML error ``err`` with file,
+    line and column."""
+    import json
+
+    if not getattr(err, "duplicate", False):
+
+        def unique(pairs: list) -> dict:
+            keys = [key for key, _ in pairs]
+            twice = next((key for i, key in enumerate(keys) if key in keys[:i]), None)
+            if twice is not None:
+                raise ConfigError(f"{path}: the key {twice!r} is given twice in one object; give each key once")
+            return dict(pairs)
+
+        try:
+            return json.loads(text, object_pairs_hook=unique)
+        except json.JSONDecodeError:
+            pass  # not JSON either: the YAML error stands
+    mark = err.problem_mark or err.context_mark
+    where = f"{path}:{mark.line + 1}:{mark.column + 1}" if mark else str(path)
+    raise ConfigError(f"{where}: {err.problem or err.context}") from None
 
 
 SCENE_NAME_CHARS = "letters, digits, _ and -"
@@ -134,17 +210,33 @@ def load_config(path: str | os.PathLike = DEFAULT_CONFIG) -> dict:
 
 
 def validate_config(config: dict, schema: str | Path = SCHEMA) -> None:
-    """The scene defaults (``apply_scene_defaults``), the schema check (one line per error,
-    ``schema_message``), then Snakemake's ``validate``, which fills in the schema's defaults."""
+    """The scene defaults (``apply_scene_defaults``), then one pass of the schema check that fills
+    in the schema's defaults as it goes (as Snakemake's ``validate`` does, the recipe of
+    jsonschema's FAQ) and reports the best-matching error in one line (``schema_message``)."""
     import jsonschema
-    from snakemake.utils import validate
 
     apply_scene_defaults(config)
-    validator = jsonschema.Draft202012Validator(load_yaml(schema))
-    error = jsonschema.exceptions.best_match(validator.iter_errors(config))
+    error = jsonschema.exceptions.best_match(_defaults_validator()(load_yaml(schema)).iter_errors(config))
     if error is not None:
         raise ConfigError(schema_message(error))
-    validate(config, str(schema))
+
+
+@cache
+def _defaults_validator():
+    """Draft 2020-12 validation that also sets every missing property that has a ``default``."""
+    import jsonschema
+
+    base = jsonschema.Draft202012Validator
+    properties = base.VALIDATORS["properties"]
+
+    def set_defaults(validator, props, instance, schema):
+        if isinstance(instance, dict):
+            for name, sub in props.items():
+                if isinstance(sub, dict) and "default" in sub:
+                    instance.setdefault(name, copy.deepcopy(sub["default"]))
+        yield from properties(validator, props, instance, schema)
+
+    return jsonschema.validators.extend(base, {"properties": set_defaults})
 
 
 # --- the checks of single fields: the config check and the command line share them -------------
@@ -193,7 +285,25 @@ def check_norm_name(field: str, name: object) -> str:
             f"{field}: {name!r} is the norm {canonical}; write it {canonical} (one spelling per norm: "
             "the exponent without leading zeros or a trailing .0)"
         )
+    _check_exponent(field, canonical)
     return canonical
+
+
+LARGEST_EXPONENT = 1023  # |e/s|^p with the power of two s ≤ max|e| < 2s is below 2^p: a double up to p = 1023
+
+
+def _check_exponent(field: str, name: str) -> None:
+    """Refuse an Lp/W1p exponent whose evaluation overflows a double (``power_scale``)."""
+    from signorini.fem.norms.names import lp_names, parse_norm_name
+
+    spec = parse_norm_name(name)
+    if spec.p is not None and LARGEST_EXPONENT < spec.p < float("inf"):
+        limit = lp_names(float("inf"))[0 if spec.family == "L" else 1] + spec.part + ("_true" if spec.true else "")
+        raise ConfigError(
+            f"{field}: the exponent p = {spec.p:g} of {name} is too large: the norm sums |e/s|^p with s the power "
+            f"of two at or below max |e|, which reaches 2^p and overflows a double for p > {LARGEST_EXPONENT}; "
+            f"take p ≤ {LARGEST_EXPONENT}, or {limit} for the maximum (the limit p → ∞)"
+        )
 
 
 def check_norm_names(field: str, names: Sequence) -> None:
@@ -220,8 +330,75 @@ def amplitude_floor(R: float, N_max: int) -> float:
     return SMALLEST_NORMAL * float(N_max) ** 2 / float(R) ** 1.5
 
 
-def check_amplitude(field: str, A: float, R: float, Ns: Sequence[int]) -> None:
-    """``A`` > 0 and large enough that the errors on the finest mesh do not underflow (``amplitude_floor``)."""
+@cache
+def rhs_peak(R: float, c: float) -> float:
+    """``max |f| / A`` of the manufactured problem with support radius ``R`` and reaction ``c``.
+
+    ``f = A ũ (-4 ψ'/r - ψ'' + c ψ)`` (``fem.problem.Problem.f``) with ``|ũ| = r^{3/2} |sin(3θ/2)|``,
+    so at each ``r`` the largest ``|f|`` is on the ray ``θ = π/3`` (``sin(3θ/2) = 1``): ``Problem.f``
+    itself is evaluated there at ``A = 1``, on a grid of ``[0, R]`` refined around its maximum
+    (relative error of the maximum about 1e-13).  ``u`` and ``∇u`` are smaller: ``|u| ≤ A R^{3/2}``,
+    ``|∇u| ≤ A (630 max s^{11/2} (1 − s)⁴ + 3/2) R^{1/2} ≤ 2.5 A R^{1/2}``, against a peak of about
+    ``7.5 A R^{-1/2}`` here, for the admissible ``R < 1/2``."""
+    import numpy as np
+
+    from signorini.fem.problem import Problem
+
+    problem = Problem(x0=0.5, R=float(R), A=1.0, c=float(c))
+
+    def on_ray(r: np.ndarray) -> np.ndarray:
+        return np.abs(problem.f(np.array([0.5 + r / 2, r * math.sqrt(3.0) / 2])))
+
+    r = np.linspace(0.0, float(R), 2049)
+    i = int(np.argmax(on_ray(r)))
+    fine = np.linspace(r[max(i - 1, 0)], r[min(i + 1, r.size - 1)], 2049)
+    return float(max(on_ray(r).max(), on_ray(fine).max()))
+
+
+def amplitude_ceiling(R: float, c: float) -> float:
+    """The largest amplitude ``A`` whose right-hand side ``f`` (``rhs_peak``), and so the load
+    vector ``b_i = ∫ f φ_i`` (a sum of ``f`` times weights of total at most 1), is a finite double.
+    The norms of the error are computed with power-of-two scaling (``fem.norms.conventional``) and
+    measure values of the size of ``u`` and ``∇u``, several times smaller than ``f`` (``rhs_peak``),
+    so ``f`` is the bound (``tests/pipeline/test_config.py`` computes b, the solve and the norms just
+    below it).  The 16 rounding units allow for the dozen floating-point operations that compute ``f``."""
+    return sys.float_info.max / (rhs_peak(R, c) * (1.0 + 16 * sys.float_info.epsilon))
+
+
+@cache
+def energy_of_u1(R: float, c: float) -> float:
+    """``a(u₁, u₁) = ∫ |∇u₁|² + c u₁²`` of the manufactured solution at ``A = 1``.
+
+    ``u₁ = −ψ(r) r^{3/2} sin(3θ/2)`` on the half-disc ``r < R``, ``0 ≤ θ ≤ π``; ``sin²`` and ``cos²``
+    of ``3θ/2`` both integrate to ``π/2`` over ``[0, π]``, so ``a = (π/2) ∫₀^R ((ψ' r^{3/2} + (3/2) ψ
+    r^{1/2})² + (9/4) ψ² r + c ψ² r³) r dr``, a polynomial of degree 22 in ``r`` (ψ has degree 9):
+    16-point Gauss–Legendre integrates it exactly."""
+    import numpy as np
+
+    from signorini.fem.problem import Problem
+
+    problem = Problem(x0=0.5, R=float(R), A=1.0, c=float(c))
+    x, w = np.polynomial.legendre.leggauss(16)
+    r, w = (x + 1.0) * R / 2, w * R / 2
+    psi, dpsi = problem.psi(r), problem.dpsi(r)
+    radial = (dpsi * r**1.5 + 1.5 * psi * np.sqrt(r)) ** 2 + 2.25 * psi**2 * r + c * psi**2 * r**3
+    return float(math.pi / 2 * np.sum(w * radial * r))
+
+
+def energy_ceiling(R: float, c: float) -> float:
+    """The largest amplitude whose energy ``A² a(u₁, u₁)`` (``energy_of_u1``) is a finite double:
+    conjugate gradients (the multigrid route, the theory scene's Ritz projection) and the H¹ norms
+    of P1 functions compute such energies as plain sums, and break down beyond it (measured: the
+    multigrid route fails from 1.0003 to 1.06 times this bound on, for N = 41 to 201, R = 0.1 to
+    0.45, c = 0 to 1e4; the discrete energy approaches a(u, u) from below)."""
+    return math.sqrt(sys.float_info.max) / math.sqrt(energy_of_u1(R, c) * (1.0 + 16 * sys.float_info.epsilon))
+
+
+def check_amplitude(field: str, A: float, R: float, Ns: Sequence[int], c: float = 1.0, energies: bool = False) -> None:
+    """``A`` > 0, large enough that the errors on the finest mesh do not underflow
+    (``amplitude_floor``) and small enough that the right-hand side does not overflow
+    (``amplitude_ceiling``, which depends on the reaction coefficient ``c``); with ``energies``
+    (jobs that run conjugate gradients), small enough that the energy does not (``energy_ceiling``)."""
     if A == 0.0:
         raise ConfigError(
             f"{field}: 0 makes u ≡ 0 and every error vanish, so no order of convergence exists"
@@ -233,6 +410,48 @@ def check_amplitude(field: str, A: float, R: float, Ns: Sequence[int]) -> None:
             f"{field}: {A!r} is too small: at N = {max(Ns, default=1)} the errors (about A·R^1.5/N²) would be "
             f"subnormal numbers and lose their digits; need A ≥ {floor:.1e}"
         )
+    ceiling = amplitude_ceiling(R, c)
+    if abs(A) > ceiling:
+        raise ConfigError(
+            f"{field}: {A!r} is too large: the right-hand side f = -Δu + cu reaches {rhs_peak(R, c):.3g}·A "
+            f"(R = {R}, c = {c}) and the load vector would overflow to inf; need A ≤ {ceiling:.4e}"
+        )
+    ceiling = energy_ceiling(R, c)
+    if energies and abs(A) > ceiling:
+        raise ConfigError(
+            f"{field}: {A!r} is too large for conjugate gradients (the multigrid route, the theory quantities): "
+            f"the energy A²·a(u₁, u₁) = {energy_of_u1(R, c):.3g}·A² (R = {R}, c = {c}) would overflow to inf; need "
+            f"A ≤ {ceiling:.4e}, or the active_set solver"
+        )
+
+
+# The support of u must span this many cells of the coarsest mesh (R·N ≥ 3).  Measured with the
+# paper's norms and the one-sided L4plus/L4minus on N = 11, 21, 41 (x0 = 0.5 and 0.37): below one
+# cell the error or a one-sided part of it vanishes (no node in the support: u_h does not see u) or
+# grows on refinement; at one cell an EOC is still negative (L4plus); from about two cells every EOC
+# is positive, and at three they approach the asymptotic orders.  Every shipped scene has R·N ≥ 4.95.
+SUPPORT_CELLS = 3
+
+
+def check_support(where: str, problem, Ns: Sequence[int]) -> None:
+    """The support of ``u`` (the half-disc of radius ``R`` around ``(x0, 0)``) spans at least
+    ``SUPPORT_CELLS`` cells of the coarsest mesh: ``R ≥ 3 h``.  Named as ``problem.R`` when a
+    larger admissible ``R`` (``R < min(x0, 1 − x0)``) would do, else as the coarsest mesh ``N[0]``."""
+    if not Ns:
+        return
+    N, R = min(Ns), float(problem.R)
+    if R * N * (1 + 1e-12) >= SUPPORT_CELLS:  # the product rounds: R = 3/N itself passes
+        return
+    need_N = math.ceil(SUPPORT_CELLS / R * (1 - 1e-12))
+    r_max = min(problem.x0, 1.0 - problem.x0)
+    what = (
+        f"the support of u (radius R = {R:g} around x0 = {problem.x0:g}) spans {R * N:.3g} cells of the coarsest "
+        f"mesh N = {N}; with fewer than {SUPPORT_CELLS} the errors (or their one-sided parts) vanish or grow on "
+        "refinement: no order of convergence"
+    )
+    if SUPPORT_CELLS / N < r_max:
+        raise ConfigError(f"{where}.problem.R: {what}; need R ≥ {SUPPORT_CELLS / N:.3g} or meshes from N = {need_N}")
+    raise ConfigError(f"{where}.N[0]: {what}; start the meshes at N = {need_N} (R ≥ {SUPPORT_CELLS}h)")
 
 
 def check_memory(field: str, N: int, limit_mb: int, available: str = "available", solver: str = "active_set") -> None:
@@ -310,11 +529,66 @@ def _check_scene(where: str, scene: Mapping, limit: int, available: str, node: N
         problem = Problem(**scene.get("problem", {}))
     except (ProblemParameterError, TypeError) as err:
         raise ConfigError(f"{where}.problem: {err}") from None
-    check_amplitude(f"{where}.problem.A", problem.A, problem.R, Ns)
+    energies = _runs_conjugate_gradients(where, scene, Ns)
+    check_amplitude(f"{where}.problem.A", problem.A, problem.R, Ns, problem.c, energies)
+    check_support(where, problem, Ns)
+    _check_study_and_atlas(where, scene)
     try:
         Conventions(**scene.get("conventions", {}))
     except (ValueError, TypeError) as err:
         raise ConfigError(f"{where}.conventions: {err}") from None
+
+
+def _runs_conjugate_gradients(where: str, scene: Mapping, Ns: Sequence[int]) -> bool:
+    """Whether jobs of the scene compute energies by conjugate gradients: a solve by the multigrid
+    route (the scene's solver or a study configuration's, ``auto`` by the mesh's size), or the
+    theory quantities (a Ritz projection by multigrid CG and H¹ norms, energies both)."""
+    from signorini.pipeline.paths import THEORY_SCENE
+    from signorini.pipeline.resources import solve_rule
+
+    study = scene.get("study") if isinstance(scene.get("study"), Mapping) else {}
+    configs = study.get("configs") or {}
+    solvers = [scene.get("solver", "")]
+    solvers += [spec.get("solver", "") for spec in configs.values() if isinstance(spec, Mapping)]
+    multigrid = any(solve_rule(str(solver), N) == "solve_multigrid" for solver in solvers for N in Ns)
+    return multigrid or where == f"scenes.{THEORY_SCENE}"
+
+
+def _check_study_and_atlas(where: str, scene: Mapping) -> None:
+    """The tolerances a study or an atlas passes to its solvers besides their options (checked by
+    ``solver_options.check_options``): a study's ``tolerances``, an atlas column's ``kkt_tol``."""
+    from signorini.pipeline.solver_options import value_problem
+
+    study, atlas = scene.get("study"), scene.get("atlas")
+    tolerances = (study.get("tolerances") or []) if isinstance(study, Mapping) else []
+    for i, tol in enumerate(tolerances):
+        if (problem := value_problem("tol", tol, float)) is not None:
+            raise ConfigError(f"{where}.study.tolerances[{i}]: {tol!r} {problem}")
+    columns = (atlas.get("solvers") or {}) if isinstance(atlas, Mapping) else {}
+    for label, spec in columns.items():
+        tol = spec.get("kkt_tol") if isinstance(spec, Mapping) else None
+        if tol is not None and (problem := value_problem("kkt_tol", tol, float)) is not None:
+            raise ConfigError(f"{where}.atlas.solvers.{label}.kkt_tol: {tol!r} {problem}")
+
+
+def check_numbers(value: object, path: tuple = ()) -> None:
+    """No NaN anywhere in the config (YAML's ``.nan``): no field can use it, and it passes every
+    bound of the schema (each comparison with NaN is false)."""
+    if isinstance(value, float) and math.isnan(value):
+        raise ConfigError(f"{field_name(path)}: .nan is not a number; give a number")
+    if isinstance(value, Mapping):
+        for key, item in value.items():
+            check_numbers(item, (*path, key))
+    elif isinstance(value, list):
+        for i, item in enumerate(value):
+            check_numbers(item, (*path, i))
+
+
+def check_cores(cores: int | None, nodes: int | None = None) -> None:
+    """``--cores`` of a run on this machine is at least 1: with 0 Snakemake plans the jobs and
+    then waits for a free core for ever (with ``--jobs`` on a cluster the cores bound nothing)."""
+    if cores is not None and cores < 1 and nodes is None:
+        raise ConfigError(f"--cores {cores}: no job could ever run; give at least 1")
 
 
 def _check_runtime(where: str, Ns: list, norms: list, node: NodeLimits) -> None:
@@ -338,16 +612,18 @@ def check_config(config: dict, mem_limit_mb: int | None = None, node: NodeLimits
     """Semantic checks of a schema-valid config: scene names that can be paths, integer ``N``
     strictly increasing, norm names of the grammar (``fem.norms.names``) in their one spelling and
     each once, admissible problem parameters with an amplitude whose errors do not underflow,
-    conventions, meshes whose jobs fit into ``mem_limit_mb`` (default: this machine's memory; with
-    ``node``, the largest node of a Slurm partition: its memory and time limit), the solver's
-    options (``signorini.pipeline.solver_options``), and a ``figures_scene`` with the paper's norms.
+    and a right-hand side that does not overflow, a support of ``u`` resolved by the coarsest mesh,
+    conventions, meshes whose jobs fit into ``mem_limit_mb`` (default: the memory a job can use here,
+    ``resources.usable_memory``; with ``node``, the largest node of a Slurm partition: its memory and
+    time limit), the solver's options (``signorini.pipeline.solver_options``) and tolerances, no NaN
+    anywhere, and a ``figures_scene`` with the paper's norms.
     The scene defaults are filled in first (``apply_scene_defaults``: a no-op on a validated config)."""
-    from signorini.pipeline.resources import machine_mem_mb
+    from signorini.pipeline.resources import usable_memory
 
     apply_scene_defaults(config)
 
-    limit = int(mem_limit_mb) if mem_limit_mb else machine_mem_mb()
-    available = "available"
+    # the limit the user gave, else this process's: the machine's, a cgroup's or a ulimit's
+    limit, available = (int(mem_limit_mb), "available") if mem_limit_mb else usable_memory()
     if node is not None:
         limit = min(limit, node.mem_mb) if mem_limit_mb else node.mem_mb
         available = f"of the largest node of Slurm partition {node.partition}"
@@ -358,6 +634,7 @@ def check_config(config: dict, mem_limit_mb: int | None = None, node: NodeLimits
         check_scene_name("scenes", name)
         _check_scene(f"scenes.{name}", scene, limit, available, node)
     _check_figures_scene(config, scenes)
+    check_numbers(config)  # last: the checks above say more where a NaN is a tolerance or a parameter
 
 
 def main(argv: Sequence[str] | None = None) -> int:

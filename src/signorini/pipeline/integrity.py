@@ -1,14 +1,22 @@
-"""The integrity of the cached artifacts: checks before Snakemake plans a run, and the table
-contract every reader uses.
+"""The integrity of the cached artifacts: the check before Snakemake runs the jobs of a plan, and
+the table contract every reader uses.
 
-A cached artifact damaged after it was written (a truncated ``.npz``, an incomplete JSON, a
-cut-off ``errors.csv``, a checksum removed by hand) is moved to ``<name>.corrupt`` by
-``quarantine_corrupt``, so that Snakemake rebuilds it when a job needs it instead of handing it
-to the next stage.  A valid artifact that is out of date (computed by other code, from other
-inputs or with other parameters than the current config asks; a scene table holding other meshes
-or norms than the scene's) is removed by ``remove_stale``, whether or not Snakemake's metadata
-knows about it.  Only a Snakemake call that runs jobs changes anything (``runs_jobs``, asked of
-the executor Snakemake starts): a dry run names what it finds and leaves the cache as it is.
+The check (``judge``) looks at the outputs of the jobs the requested targets need -- the jobs of
+this run's DAG, nothing else -- and decides for each existing one:
+
+* **damaged** (a truncated or edited archive, an incomplete JSON, a table whose bytes differ from
+  its seal): moved to ``<name>.corrupt`` and rebuilt.  Archives read by a job of this run (and
+  requested targets) are verified in full, streaming, whatever their size;
+* **not vouched for** (out of date: computed by other code, with other libraries, other parameters,
+  from other inputs than the ones now on disk, from an out-of-date artifact; misplaced: it records
+  other wildcards than where it sits; or written outside a job of this workflow): moved to
+  ``<name>.stale`` and rebuilt;
+* **a rendered output** (``paper_figures/``, committed) that is not what its job would render from
+  the current cache (never rendered here, edited, rendered from another scene or other inputs): its
+  job is forced to run; the file itself is never moved or deleted.
+
+Nothing is deleted: ``make clean-corrupt`` removes what was moved aside.  Only a Snakemake call
+that runs jobs changes anything (``runs_jobs``): a dry run names what it finds.
 """
 
 from __future__ import annotations
@@ -19,23 +27,25 @@ import io
 import json
 import math
 import os
-import re
 import sys
 import time
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable, Mapping, Sequence, Set
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from signorini.pipeline.artifacts import (
     CorruptArtifactError,
-    changed_input,
     content_digest,
+    file_digest,
+    is_sealed_kind,
     load_json,
-    load_npz,
     provenance_of,
+    seal_of,
+    verify_npz,
 )
-from signorini.pipeline.paths import BENCHMARKS, PATHS, RESULTS
+from signorini.pipeline.joblog import plain
+from signorini.pipeline.paths import FIGDIR
 
 
 def table_defect(path: str | os.PathLike) -> str | None:
@@ -71,77 +81,6 @@ def table_defect(path: str | os.PathLike) -> str | None:
     return None
 
 
-@dataclass(frozen=True)
-class TableShape:
-    """What a scene table must hold: its ``N`` labels (first column) and its header."""
-
-    rows: tuple[str, ...]
-    columns: tuple[str, ...]
-
-
-def expected_shape(path: Path, block: Mapping) -> TableShape | None:
-    """The rows and columns ``errors.csv`` / ``eoc.csv`` of a scene with config ``block`` must hold
-    (``N``, ``h``, then the scene's norms in scene order, as ``errors_stage`` writes them)."""
-    labels = tuple(str(N) for N in block.get("N", []))
-    rows = {"errors.csv": labels, "eoc.csv": (*labels[1:], "regression")}.get(path.name)
-    return None if rows is None else TableShape(rows, ("N", "h", *block.get("norms", [])))
-
-
-def _listed(items: Sequence[str]) -> str:
-    return ", ".join(items) or "none"
-
-
-def table_mismatch(path: Path, shape: TableShape | None) -> str | None:
-    """Why a (complete) table is out of date: it holds other meshes or norms than ``shape`` asks
-    (None when it holds exactly those, or cannot be read: the damage check names that)."""
-    if shape is None or not path.is_file() or not artifact_ok(path):
-        return None
-    try:
-        rows = list(csv.reader(io.StringIO(path.read_text(encoding="utf-8"))))
-    except (OSError, UnicodeDecodeError, csv.Error):
-        return None
-    if not rows:
-        return None
-    held = tuple(row[0] for row in rows[1:] if row)
-    if held != shape.rows:
-        return f"holds the rows N = {_listed(held)}, the scene asks for {_listed(shape.rows)}"
-    if tuple(rows[0]) != shape.columns:
-        return f"has the norms {_listed(rows[0][2:])}, the scene asks for {_listed(shape.columns[2:])}"
-    return None
-
-
-def rendered_mismatch(tables: Mapping[str, str | os.PathLike], Ns: Sequence[int]) -> str | None:
-    """Why the paper's rendered tables (``{"table1": csv, "table2": csv}``) are out of date: they
-    hold other meshes than the rendered scene's ``Ns`` (a changed ``N`` list; Snakemake's own
-    record of the inputs may be gone).  None when they hold exactly those, or do not exist."""
-    labels = [f"1/{int(N)}" for N in Ns]
-    expected = {"table1": labels, "table2": [*labels[1:], "regr.", "theo."]}
-    for name, path in tables.items():
-        path = Path(path)
-        if not path.is_file():
-            continue
-        try:
-            rows = list(csv.reader(io.StringIO(path.read_text(encoding="utf-8"))))
-        except (OSError, UnicodeDecodeError, csv.Error):
-            return f"{path} cannot be read"
-        held = [row[0] for row in rows[1:] if row]
-        if held != expected[name]:
-            return f"{path} holds the rows h = {_listed(held)}, the rendered scene asks for {_listed(expected[name])}"
-    return None
-
-
-def remove_rendered(outputs: Iterable[str | os.PathLike], reason: str, execute: bool) -> list[str]:
-    """Delete the paper's rendered outputs of another state of the rendered scene (``reason``), so
-    that ``all`` renders them anew, or, in a read-only call, only name them."""
-    present = [str(path) for path in outputs if Path(path).exists()]
-    if present:
-        verb = "removed; rebuilt when a job needs them" if execute else "a run that needs them rebuilds them"
-        print(f"signorini: out of date: {reason}: {', '.join(present)} ({verb})", file=sys.stderr)
-        for path in present if execute else ():
-            os.remove(path)
-    return present
-
-
 def _benchmark_ok(path: Path) -> bool:
     """A complete Snakemake benchmark file: a header starting with ``s`` (seconds), at least one
     row with the header's number of fields and a finite, non-negative number of seconds."""
@@ -155,32 +94,16 @@ def _benchmark_ok(path: Path) -> bool:
         return False
 
 
-CHECKSUM_MAX_BYTES = 64 * 2**20  # larger archives (the assembled systems of fine meshes) get a structural check
-
-
-def _zip_complete(path: Path) -> bool:
-    """A large archive is complete if its zip directory lists its checksum (a truncated file has
-    none); the checksum itself is verified by every job that loads it."""
-    import zipfile
-
-    try:
-        with zipfile.ZipFile(path) as archive:
-            return "_checksum.npy" in archive.namelist()
-    except (OSError, zipfile.BadZipFile):
-        return False
-
-
 def artifact_ok(path: str | os.PathLike) -> bool:
-    """True unless ``path`` exists and fails its integrity check (npz checksum, JSON checksum and
-    completeness marker, complete rows of ``errors.csv``/``eoc.csv`` and of a benchmark ``.tsv``)."""
+    """True unless ``path`` exists and fails its own integrity check (npz checksum, streamed; JSON
+    checksum and completeness marker; complete rows of ``errors.csv``/``eoc.csv`` and of a benchmark
+    ``.tsv``).  Whether a table is the one its job wrote is its seal's question (``verify_seal``)."""
     path = Path(path)
     if not path.exists():
         return True
     try:
-        if path.suffix == ".npz" and path.stat().st_size > CHECKSUM_MAX_BYTES:
-            return _zip_complete(path)
         if path.suffix == ".npz":
-            load_npz(path)
+            verify_npz(path)
         elif path.suffix == ".json":
             load_json(path)
         elif path.suffix == ".csv":
@@ -199,110 +122,6 @@ def runs_jobs(executor_plugin: Any) -> bool:
     ``execute``, so whatever Snakemake's parser accepts is decided as Snakemake decides it."""
     settings = executor_plugin.common_settings
     return not (settings.dryrun_exec or settings.touch_exec)
-
-
-def corrupt_artifacts(paths: Iterable) -> list[str]:
-    """The existing but damaged artifacts among ``paths`` (a path, or a pair of a table's path and
-    the ``N`` labels it must hold, as ``cached_artifacts`` yields them)."""
-    checks = [item[0] if isinstance(item, tuple) else item for item in paths]
-    return [str(path) for path in checks if not artifact_ok(path)]
-
-
-def warn_corrupt(paths: Iterable[str | os.PathLike]) -> list[str]:
-    """Name every damaged artifact among ``paths`` on stderr, touching nothing (read-only calls)."""
-    damaged = corrupt_artifacts(paths)
-    for path in damaged:
-        print(
-            f"signorini: damaged artifact {path}; a run that needs it moves it aside and rebuilds it", file=sys.stderr
-        )
-    return damaged
-
-
-ParamsOf = Callable[[str, dict], "dict | None"]
-
-
-def changed_param(recorded: Mapping, expected: Mapping) -> str | None:
-    """The first parameter whose recorded value differs from the expected one, as ``name: old ->
-    new`` (None when they agree); compared as JSON text, as recorded (a NaN equals itself there)."""
-    for key in sorted(set(recorded) | set(expected)):
-        old, new = (json.dumps(side.get(key, "(none)"), sort_keys=True) for side in (recorded, expected))
-        if old != new:
-            return f"{key}: {old} -> {new}"
-    return None
-
-
-def _recorded(paths: Iterable) -> dict[str, dict]:
-    """{path: provenance} of the existing ``.npz``/``.json`` artifacts among ``paths`` (damaged ones
-    are left to the damage check)."""
-    recorded: dict[str, dict] = {}
-    for item in paths:
-        path = Path(item[0] if isinstance(item, tuple) else item)
-        if path.suffix not in (".npz", ".json") or not path.exists():
-            continue
-        try:
-            recorded[str(path)] = provenance_of(path) or {}
-        except CorruptArtifactError:
-            continue
-    return recorded
-
-
-def stale_artifacts(
-    paths: Iterable, current_code: Callable[[str], str], current_params: ParamsOf | None = None
-) -> list[tuple[str, str]]:
-    """The artifacts among ``paths`` that are valid but out of date, each with the reason: a recorded
-    code digest other than ``current_code(rule)`` of the rule that wrote it (a job that ran older
-    code, say an edit during the run, which modification times cannot tell); inputs other than the
-    ones now on disk (an input replaced by a copy with an old modification time); parameters other
-    than ``current_params(path, provenance)``, the ones a job writing it now would get (a changed
-    scene, also when Snakemake's metadata is gone); computed from such an artifact; a scene table
-    (a pair of path and ``TableShape``) holding other meshes or norms than its scene's."""
-    paths = list(paths)
-    recorded = _recorded(paths)
-    stale: dict[str, str] = {}
-    digest = functools.cache(content_digest)  # the norms of a mesh share its solution
-    for path, prov in recorded.items():
-        expected = current_params(path, prov) if current_params and "params" in prov else None
-        if prov.get("code") and prov["code"] != current_code(prov["rule"]):
-            stale[path] = "was computed by other code than the current one"
-        elif changed := changed_input(prov, digest):
-            stale[path] = f"was computed from another {changed} than the one now on disk"
-        elif expected is not None and (changed := changed_param(prov["params"], expected)):
-            stale[path] = f"was computed with other parameters than the config asks now ({changed})"
-    grown = True
-    while grown:  # and everything computed from a stale artifact
-        grown = False
-        for path, prov in recorded.items():
-            source = next((p for p in prov.get("inputs") or {} if p in stale), None)
-            if path not in stale and source:
-                stale[path], grown = f"was computed from {source}, which is out of date", True
-    for item in paths:
-        if isinstance(item, tuple) and (reason := table_mismatch(Path(item[0]), item[1])):
-            stale[str(item[0])] = reason
-    return list(stale.items())
-
-
-def remove_stale(
-    paths: Iterable, current_code: Callable[[str], str], execute: bool, current_params: ParamsOf | None = None
-) -> list[str]:
-    """Delete the out-of-date artifacts (``stale_artifacts``) and the scene tables computed from them
-    (``errors.csv``, ``eoc.csv`` of the same scene), so that a job that needs one rebuilds it and
-    everything after it reruns, or, in a read-only call (``execute`` false), only name them.  They
-    are valid files of another state, not damage: deleted, not moved to ``.corrupt``."""
-    stale = stale_artifacts(paths, current_code, current_params)
-    named = {path for path, _ in stale}
-    scenes = {Path(*Path(path).parts[:2]) for path, _ in stale}  # results/<scene>/...
-    derived = [str(scene / name) for scene in sorted(scenes) for name in ("errors.csv", "eoc.csv")]
-    stale += [
-        (path, "was derived from an out-of-date artifact of its scene")
-        for path in derived
-        if Path(path).exists() and path not in named
-    ]
-    for path, reason in stale:
-        if execute:
-            os.remove(path)
-        verb = "removed; rebuilt when a job needs it" if execute else "a run that needs it rebuilds it"
-        print(f"signorini: out of date: {path} {reason} ({verb})", file=sys.stderr)
-    return [path for path, _ in stale]
 
 
 def leftover_temporaries(roots: Iterable[str | os.PathLike], min_age_s: float = 120.0) -> list[Path]:
@@ -325,49 +144,243 @@ def remove_leftover_temporaries(roots: Iterable[str | os.PathLike], execute: boo
     return leftovers
 
 
-def quarantine_corrupt(paths: Iterable[str | os.PathLike]) -> list[str]:
-    """Move every existing but corrupt artifact among ``paths`` to ``<name>.corrupt``.
-
-    The Snakefile calls it for ``cached_artifacts`` before Snakemake looks at any file.
-    The artifact is then missing, so Snakemake rebuilds it as soon as a job of the run
-    needs it (a requested target, or the input of a job that has to run), instead of
-    handing a truncated file to the next stage.  Outputs already derived from it stay
-    valid: they were computed before the damage (it was written atomically and checked
-    when read).
-    """
-    moved = corrupt_artifacts(paths)
-    for path in moved:
-        os.replace(path, f"{path}.corrupt")
-        print(
-            f"signorini: corrupt artifact {path} moved to {path}.corrupt; rebuilt when a job needs it", file=sys.stderr
-        )
-    return moved
 
 
-# the artifacts the cache check reads: every path of the scene chain and the studies that is an
-# archive or a JSON record (their checksums), the two scene tables (their contract and shape) and
-# the benchmark files of the computing rules
-CHECKED_PATHS = tuple(key for key, template in PATHS.items() if template.endswith((".npz", ".json")))
-TABLE_PATHS = ("errors_csv", "eoc_csv")
+# --- the check of a plan -------------------------------------------------------------------------
 
 
-def _pattern(template: str, scene: str) -> str:
-    """A path template of ``paths`` as a glob under the results directory, for one scene (every
-    other wildcard matches anything)."""
-    relative = Path(template).relative_to(RESULTS).as_posix().replace("{scene}", scene)
-    return re.sub(r"\{[^}]*\}", "*", relative)
+@dataclass(frozen=True)
+class Planned:
+    """An output of a job of this run's plan, as the job would write it now: its rule, the digest
+    of its code now, its parameters and wildcards (as artifacts record them:
+    ``signorini.pipeline.joblog.plain``), its data inputs, and whether this run reads it in full
+    (an input of a job that runs, or a requested target)."""
+
+    path: str
+    rule: str
+    code: str
+    params: Mapping
+    wildcards: Mapping
+    inputs: tuple[str, ...] = ()
+    read: bool = False
+    recorded: bool = True  # False: a file that records nothing (a benchmark file): checked for damage only
 
 
-def cached_artifacts(root: str | os.PathLike, scenes: Mapping[str, Mapping]) -> Iterator[Path | tuple]:
-    """The checkable cached artifacts of the given scenes under ``root`` (the results directory),
-    from the path templates of ``signorini.pipeline.paths`` (``CHECKED_PATHS``, the tables of
-    ``TABLE_PATHS`` with what they must hold (``expected_shape``), the benchmark files)."""
-    root = Path(root)
-    for scene, block in scenes.items():
-        for key in CHECKED_PATHS:
-            yield from sorted(root.glob(_pattern(PATHS[key], scene)))
-        for key in TABLE_PATHS:
-            table = root / _pattern(PATHS[key], scene)
-            yield table, expected_shape(table, block)
-        for template in BENCHMARKS.values():
-            yield from sorted(root.glob(_pattern(template, scene)))
+@dataclass
+class Verdicts:
+    """What the check decided, each path with its one-line reason: ``corrupt`` (to
+    ``<name>.corrupt``), ``stale`` (to ``<name>.stale``), ``rerender`` (rendered outputs whose job
+    is forced to run; never moved)."""
+
+    corrupt: dict[str, str] = field(default_factory=dict)
+    stale: dict[str, str] = field(default_factory=dict)
+    rerender: dict[str, str] = field(default_factory=dict)
+
+    def __bool__(self) -> bool:
+        return bool(self.corrupt or self.stale or self.rerender)
+
+
+def planned_outputs(dag: Any, code_digest: Callable[[Iterable[str]], str]) -> list[Planned]:
+    """Every output (and benchmark file) of the jobs of a Snakemake DAG, as its job would write it
+    now (``code_digest`` of the job's code inputs, as ``joblog.job_provenance`` records it); read
+    in full when a job that runs reads it, or when it is a requested target."""
+    read = {str(f) for job in dag.needrun_jobs() for f in job.input}
+    read |= {str(f) for job in dag.targetjobs for f in job.output}
+    digests: dict[tuple[str, ...], str] = {}
+    planned = []
+    for job in dag.jobs:
+        code = tuple(sorted(str(f) for f in getattr(job.input, "code", [])))
+        if code not in digests:
+            digests[code] = code_digest(code)
+        record = {
+            "rule": job.rule.name,
+            "code": digests[code],
+            "params": plain(job.params.items()),
+            "wildcards": plain(job.wildcards.items()),
+            "inputs": tuple(str(f) for f in job.input if str(f) not in code),
+        }
+        planned += [Planned(str(f), read=str(f) in read, **record) for f in job.output]
+        if job.benchmark:
+            planned.append(Planned(str(job.benchmark), recorded=False, **record))
+    return planned
+
+
+def is_rendered(path: str | os.PathLike) -> bool:
+    """A rendered output (``paper_figures/``): committed, so never moved aside, only rendered anew."""
+    return Path(os.path.abspath(path)).is_relative_to(Path(os.path.abspath(FIGDIR)))
+
+
+def damage(path: str | os.PathLike, read: bool) -> str | None:
+    """Why an existing output is damaged (None when it is whole).  An archive is verified in full
+    (streamed) when this run reads it, else by its zip directory; a file without a checksum of its
+    own by its seal (a table edited by hand, a spreadsheet's round trip)."""
+    path = Path(path)
+    try:
+        if path.suffix == ".npz":
+            if read:
+                verify_npz(path)
+            elif not _zip_lists_checksum(path):
+                return "truncated (its archive directory lists no checksum)"
+        elif path.suffix == ".json":
+            load_json(path)
+        elif path.suffix == ".tsv" and not _benchmark_ok(path):
+            return "an incomplete benchmark file"
+        elif is_sealed_kind(path) and (seal := seal_of(path)) and seal.get("sha256") != file_digest(path):
+            return "its bytes differ from what its job wrote (edited by hand, or damaged)"
+        elif path.name in ("errors.csv", "eoc.csv") and (reason := table_defect(path)):
+            return reason
+    except (CorruptArtifactError, OSError, UnicodeDecodeError, csv.Error) as err:
+        return str(err).removeprefix(f"{path}: ")
+    return None
+
+
+def _zip_lists_checksum(path: Path) -> bool:
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as archive:
+            return "_checksum.npy" in archive.namelist()
+    except (OSError, zipfile.BadZipFile):
+        return False
+
+
+def _differs(recorded: Mapping, expected: Mapping) -> str | None:
+    """The first key whose recorded value differs from the expected one, as ``key: old -> new``
+    (compared as JSON text, as recorded: a NaN equals itself there)."""
+    for key in sorted(set(recorded) | set(expected)):
+        old, new = (json.dumps(side.get(key, "(none)"), sort_keys=True) for side in (recorded, expected))
+        if old != new:
+            return f"{key}: {_short(old)} -> {_short(new)}"
+    return None
+
+
+def _short(text: str, limit: int = 60) -> str:
+    return text if len(text) <= limit else f"{text[: limit - 1]}…"
+
+
+def _foreign(out: Planned, prov: Mapping | None) -> str | None:
+    """Why an output is not the one its job wrote at this place: no record of a job of this
+    workflow, or the record of another place (a file copied from elsewhere)."""
+    if not prov:
+        return "no record of the job that wrote it (written outside this workflow)"
+    if changed := _differs(prov.get("wildcards") or {}, out.wildcards):
+        return f"records other wildcards than where it sits ({changed}): a file copied from elsewhere"
+    return None
+
+
+def _unvouched(
+    out: Planned, prov: Mapping, environment: Mapping, digest: Callable[[str], str], replaced: Set[str]
+) -> str | None:
+    """Why an output of its place is not what its job would write now (None when it is).  The
+    ``replaced`` inputs (damaged, foreign) are moved aside and rebuilt: they say nothing about it."""
+    if prov.get("code") != out.code:
+        return "was computed by other code than the current one"
+    if changed := _differs(prov.get("environment") or {}, environment):
+        return f"was computed with other libraries ({changed})"
+    if changed := _differs(prov.get("params") or {}, out.params):
+        return f"was computed with other parameters than the config asks now ({changed})"
+    recorded = prov.get("inputs") or {}
+    if missing := sorted(set(out.inputs) - set(recorded)):
+        return f"was not computed from {missing[0]}, which its job reads now"
+    for source in (p for p in out.inputs if p not in replaced):
+        try:
+            if Path(source).is_file() and digest(source) != recorded[source]:
+                return f"was computed from another {source} than the one now on disk"
+        except CorruptArtifactError:
+            continue  # a damaged input is moved aside itself; this output waits for its rebuild
+    return None
+
+
+def judge(planned: Sequence[Planned], environment: Mapping) -> Verdicts:
+    """The verdicts on the existing outputs of a plan (``Planned``): damaged; foreign (no record,
+    or another place's); out of date, and everything computed from such an output; rendered
+    outputs to render anew."""
+    verdicts = Verdicts()
+    digest = functools.cache(content_digest)  # the norms of a mesh share its solution
+    present = [out for out in planned if os.path.lexists(out.path)]
+    for out in present:
+        if reason := damage(out.path, out.read):
+            _verdict(verdicts, out.path, f"damaged: {reason}", damaged=True)
+    records = {}
+    for out in (o for o in present if o.recorded and o.path not in verdicts.corrupt | verdicts.rerender.keys()):
+        try:
+            records[out.path] = provenance_of(out.path)
+        except CorruptArtifactError as err:
+            _verdict(verdicts, out.path, f"damaged: {err}", damaged=True)
+            continue
+        if (reason := _foreign(out, records[out.path])) and not _committed_and_costly(out, records[out.path]):
+            _verdict(verdicts, out.path, reason)
+    replaced = set(verdicts.corrupt) | set(verdicts.stale) | set(verdicts.rerender)
+    judged = [out for out in present if records.get(out.path) and out.path not in replaced]
+    for out in judged:
+        if reason := _unvouched(out, records[out.path], environment, digest, replaced):
+            _verdict(verdicts, out.path, reason)
+    _propagate(judged, verdicts, replaced)
+    return verdicts
+
+
+def _committed_and_costly(out: Planned, prov: Mapping | None) -> bool:
+    """A committed rendered output (no record of a run here) whose job's inputs are not all in the
+    cache: rendering it anew would recompute them (the work-precision study's measurements take
+    hours), so it is kept as the committed result; ``make check`` says it was not rendered here."""
+    return is_rendered(out.path) and not prov and not all(os.path.exists(p) for p in out.inputs)
+
+
+def _verdict(verdicts: Verdicts, path: str, reason: str, damaged: bool = False) -> None:
+    """A rendered output is rendered anew; a cached one is moved aside (damaged or not vouched for)."""
+    target = verdicts.rerender if is_rendered(path) else verdicts.corrupt if damaged else verdicts.stale
+    target[path] = reason
+
+
+def _propagate(outputs: Sequence[Planned], verdicts: Verdicts, replaced: Set[str]) -> None:
+    """Everything computed from an out-of-date output is out of date too (not from a damaged or
+    foreign one, ``replaced``: its rebuild is the artifact the consumers were computed from)."""
+    grown = True
+    while grown:
+        grown = False
+        for out in outputs:
+            if out.path in verdicts.stale or out.path in verdicts.rerender:
+                continue
+            source = next((p for p in out.inputs if p in verdicts.stale and p not in replaced), None)
+            if source is not None:
+                _verdict(verdicts, out.path, f"was computed from {source}, which is out of date")
+                grown = True
+
+
+LISTED = 4  # files named per line of the check's report; the rest are counted
+
+
+def _grouped(found: Mapping[str, str]) -> dict[str, list[str]]:
+    """{reason: paths}: files moved for the same reason share a line; everything computed from
+    out-of-date files shares one."""
+    groups: dict[str, list[str]] = {}
+    for path, reason in found.items():
+        key = "was computed from an out-of-date file" if "which is out of date" in reason else reason
+        groups.setdefault(key, []).append(path)
+    return groups
+
+
+def _named(paths: Sequence[str]) -> str:
+    more = f" and {len(paths) - LISTED} more" if len(paths) > LISTED else ""
+    return ", ".join(paths[:LISTED]) + more
+
+
+def apply_verdicts(verdicts: Verdicts, execute: bool, stream=None) -> list[str]:
+    """Move the damaged and out-of-date outputs aside (``<name>.corrupt``, ``<name>.stale``; a
+    symbolic link is moved, not what it points to) and say so, one line per reason; in a
+    read-only call only name them.  Rendered outputs are named; their jobs are forced by the
+    caller.  Returns the lines printed."""
+    stream = stream or sys.stderr
+    lines = []
+    for suffix, found in ((".corrupt", verdicts.corrupt), (".stale", verdicts.stale)):
+        for path in found if execute else ():
+            os.replace(path, f"{path}{suffix}")
+        verb = "moved to <name>" if execute else "a run moves them to <name>"
+        for reason, paths in _grouped(found).items():
+            lines.append(f"signorini: {_named(paths)}: {reason} ({verb}{suffix}; rebuilt when a job needs them)")
+    verb = "rendered anew" if execute else "a run renders them anew"
+    for reason, paths in _grouped(verdicts.rerender).items():
+        lines.append(f"signorini: {_named(paths)}: {reason} ({verb})")
+    for line in lines:
+        print(line, file=stream)
+    return lines

@@ -11,7 +11,18 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-from signorini.pipeline.artifacts import changed_input, code_digest, content_digest, provenance_of, recording
+from signorini.pipeline.artifacts import (
+    CorruptArtifactError,
+    changed_input,
+    code_digest,
+    content_digest,
+    file_digest,
+    is_sealed_kind,
+    provenance_of,
+    recording,
+    verify_npz,
+    verify_seal,
+)
 
 log = logging.getLogger("signorini.job")
 MODULES_LINE = "modules run: %s"  # the last line of a job's log file
@@ -27,12 +38,40 @@ class StaleInputError(RuntimeError):
     """An input artifact was computed from other inputs than the ones now on disk."""
 
 
+# the checkout's environment lock, whose digest every artifact records (the Snakefile sets it)
+LOCK_VARIABLE = "SIGNORINI_ENVIRONMENT_LOCK"
+# the libraries whose installed versions every artifact records beside the lock's digest
+RECORDED_LIBRARIES = ("numpy", "scipy", "scikit-fem")
+
+
+def environment() -> dict[str, str | None]:
+    """What an artifact records of the software it was computed with: the SHA-256 of the
+    environment lock (None without one) and the installed versions of ``RECORDED_LIBRARIES``."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    lock = os.environ.get(LOCK_VARIABLE)
+    record: dict[str, str | None] = {"lock": file_digest(lock) if lock and Path(lock).is_file() else None}
+    for name in RECORDED_LIBRARIES:
+        try:
+            record[name] = version(name)
+        except PackageNotFoundError:
+            record[name] = None
+    return record
+
+
 def check_inputs(paths: list[str]) -> None:
-    """Refuse an input artifact whose own recorded inputs changed since it was computed (say a
-    ``system.npz`` replaced under a ``solution.npz`` computed from the old one)."""
+    """Vouch for every input before a job reads it: an archive's checksum (streamed, any size), a
+    sealed file's bytes (a table, a Markdown page: ``CorruptArtifactError`` if edited), and that no
+    input was computed from other inputs than the ones now on disk (say a ``system.npz`` replaced
+    under a ``solution.npz`` computed from the old one: ``StaleInputError``)."""
     for path in paths:
-        if Path(path).suffix not in (".npz", ".json") or not Path(path).is_file():
+        if not Path(path).is_file():
             continue
+        if Path(path).suffix == ".npz":
+            verify_npz(path)
+        elif is_sealed_kind(path):
+            if reason := verify_seal(path):
+                raise CorruptArtifactError(f"{path}: {reason}; rebuild it")
         changed = changed_input(provenance_of(path))
         if changed:
             raise StaleInputError(f"{path} was computed from another {changed} than the one now on disk; rebuild it")
@@ -56,6 +95,7 @@ def job_provenance(job: Any) -> dict:
         "params": plain(job.params.items()),
         "wildcards": plain(job.wildcards.items()),
         "inputs": {path: content_digest(path) for path in data},
+        "environment": environment(),
     }
 
 

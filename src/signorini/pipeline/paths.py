@@ -9,6 +9,10 @@ from __future__ import annotations
 
 RESULTS = "results"  # the cached artifacts, logs and benchmark files
 FIGDIR = "paper_figures"
+# the seals of the files a job writes that carry no checksum of their own (tables, pages, figures):
+# results/.seals/<path>.json, signorini.pipeline.artifacts.seal_path
+SEALS = f"{RESULTS}/.seals"
+THEORY_SCENE = "theory"  # the scene rendered into paper_figures/theory* (its jobs: theory_quantities)
 REFERENCE = "workflow/reference"
 _MESH = "results/{scene}/N{N}"
 

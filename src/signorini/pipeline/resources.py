@@ -12,9 +12,12 @@ request is killed."""
 from __future__ import annotations
 
 import os
+import resource
 import subprocess
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
+from typing import NamedTuple
 
 from signorini.fem.norms.names import parse_norm_name
 
@@ -70,9 +73,113 @@ def mesh_group_runtime_min(N: int, norms: Sequence[str]) -> int:
     return runtime_min("discretise", N) + runtime_min("solve", N) + norms_runtime_min(N, norms)
 
 
-def machine_mem_mb() -> int:
+class MemoryLimit(NamedTuple):
+    """A memory limit in MB and what sets it, as the messages say it: ``of this machine``,
+    ``of the cgroup limit``, ``of ulimit -v`` or ``of ulimit -d``."""
+
+    mb: int
+    source: str
+
+
+def physical_mem_mb() -> int:
     """The physical memory of this machine in MB."""
     return os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES") // 2**20
+
+
+def _cgroup_dirs(proc: Path, root: Path) -> list[tuple[Path, Path, str]]:
+    """(the process's cgroup directory, the mount point, the limit file) of each memory cgroup
+    hierarchy mounted here: cgroup v2 (``memory.max``) and v1's memory controller
+    (``memory.limit_in_bytes``), found through ``mountinfo`` (a container may mount either, or both)."""
+    try:
+        groups = (proc / "cgroup").read_text(encoding="utf-8").splitlines()
+        mounts = (proc / "mountinfo").read_text(encoding="utf-8").splitlines()
+    except OSError:
+        return []
+    paths = {}  # "v2" or "v1": the process's cgroup path
+    for line in groups:
+        hid, controllers, path = (line.split(":", 2) + ["", ""])[:3]
+        if hid == "0" and not controllers:
+            paths["v2"] = path
+        elif "memory" in controllers.split(","):
+            paths["v1"] = path
+    found = []
+    for line in mounts:
+        fields, _, tail = line.partition(" - ")
+        parts, kind = fields.split(), tail.split()
+        if len(parts) < 5 or len(kind) < 3:
+            continue
+        v1 = kind[0] == "cgroup" and "memory" in kind[2].split(",")
+        version = "v2" if kind[0] == "cgroup2" else "v1" if v1 else ""
+        if version not in paths:
+            continue
+        mount_root, mount_point = parts[3], root / parts[4].lstrip("/")
+        # the cgroup's path below the mount's root (a cgroup namespace shows the mount's root itself)
+        rel = os.path.relpath(paths[version], mount_root) if paths[version].startswith(mount_root) else "."
+        limit = "memory.max" if version == "v2" else "memory.limit_in_bytes"
+        found.append((mount_point / rel, mount_point, limit))
+    return found
+
+
+def cgroup_mem_mb(proc: str | os.PathLike = "/proc/self", root: str | os.PathLike = "/") -> int | None:
+    """The smallest memory limit in MB of this process's cgroup and its parents (cgroup v2
+    ``memory.max``, v1 ``memory.limit_in_bytes``); None without one.  ``proc`` and ``root`` (where
+    the mount points of ``mountinfo`` lie) are parameters so that a test can give its own tree."""
+    limits = []
+    for directory, mount_point, name in _cgroup_dirs(Path(proc), Path(root)):
+        while True:  # a parent's limit bounds its children too
+            try:
+                text = (directory / name).read_text(encoding="utf-8").strip()
+            except OSError:
+                text = "max"
+            if text.isdigit():
+                limits.append(int(text) // 2**20)  # v1 writes "no limit" as a huge number: min() drops it
+            if directory == mount_point or mount_point not in directory.parents:
+                break
+            directory = directory.parent
+    return min(limits, default=None)
+
+
+# ulimit's options for the address-space limits of a process, by the resource module's names
+RLIMITS = {"RLIMIT_AS": "ulimit -v", "RLIMIT_DATA": "ulimit -d"}
+
+
+def rlimit_mem_mb(getrlimit: Callable[[int], tuple[int, int]] = resource.getrlimit) -> list[MemoryLimit]:
+    """The soft address-space limits of this process (``ulimit -v``, ``ulimit -d``) that are set,
+    in MB; each job inherits them, a process each."""
+    out = []
+    for name, option in RLIMITS.items():
+        soft = getrlimit(getattr(resource, name))[0]
+        if soft != resource.RLIM_INFINITY and soft >= 0:
+            out.append(MemoryLimit(soft // 2**20, f"of {option}"))
+    return out
+
+
+def usable_memory(per_process: bool = True, proc: str | os.PathLike = "/proc/self", root: str | os.PathLike = "/",
+                  getrlimit: Callable[[int], tuple[int, int]] = resource.getrlimit) -> MemoryLimit:
+    """The memory a job can use: the smallest of the physical memory, the cgroup limit and (with
+    ``per_process``, for one job) the address-space limits, with what sets it.  Without
+    ``per_process`` it is what all jobs running at once may use together: a ulimit holds for each
+    process on its own, the cgroup and the machine for all of them."""
+    limits = [MemoryLimit(physical_mem_mb(), "of this machine")]
+    if (cgroup := cgroup_mem_mb(proc, root)) is not None:
+        limits.append(MemoryLimit(cgroup, "of the cgroup limit"))
+    if per_process:
+        limits += rlimit_mem_mb(getrlimit)
+    return min(limits, key=lambda limit: limit.mb)
+
+
+def machine_mem_mb() -> int:
+    """The memory one job can use in MB (``usable_memory``): the physical memory unless a cgroup
+    or a ulimit sets less."""
+    return usable_memory().mb
+
+
+def given_mem_mb(workflow) -> int | None:
+    """The global ``mem_mb`` resource the user gave (``--resources mem_mb=…``, ``mem=…`` or a
+    profile's ``resources``; Snakemake stores each as ``mem_mb``), or None."""
+    given = getattr(workflow, "global_resources", {}).get("mem_mb")
+    value = getattr(given, "value", given)
+    return value if isinstance(value, int) else None
 
 
 def largest_job(N: int, solver: str = "active_set") -> tuple[str, int]:

@@ -12,6 +12,8 @@ against the installed packages.
 from __future__ import annotations
 
 import ast
+import math
+import re
 from collections.abc import Mapping
 from functools import cache
 from pathlib import Path
@@ -49,10 +51,26 @@ _BUILTIN = {"int": int, "float": float, "bool": bool, "str": str}
 
 
 class Option(NamedTuple):
-    """What an option accepts: values of ``kind`` (None: any), and null when ``nullable``."""
+    """What an option accepts: values of ``kind`` (None: any), and null when ``nullable``; its
+    ``default`` where known (the solvers' own signatures)."""
 
     kind: type | None
     nullable: bool = False
+    default: object = None
+
+
+# the values a solver can use, beyond their type (``value_problem``): the names of the tolerances
+# (kkt_tol, tol, inner_rtol, eps_abs, tol_gap_rel, iterative_refinement_reltol, ...) of every route
+TOLERANCE = re.compile(r"(^|_)((r|abs|rel)?tol|eps)(_|$)")
+# the caps of the iteration that is the solve (0 lets it take no step: our routes stop with
+# "not converged", OSQP and SCS refuse it, Clarabel returns at once), and the counts of optional
+# refinement steps (equilibrate_max_iter, polish_refine_iter, ...), where 0 switches them off
+ITERATION_CAPS = frozenset({"max_iter", "max_iters", "max_cg_iter", "cg_max_iter"})
+STEP_COUNT = re.compile(r"_iters?$")
+TIME_LIMIT = re.compile(r"(^|_)time_limit")
+FINITE_TIME_LIMITS = frozenset({"time_limit_secs"})  # SCS: "a nonnegative finite number"
+# (finer, coarser): multigrid_solve's final solves are at least as accurate as its inner ones
+ORDERED_TOLERANCES = (("tol", "inner_rtol"),)
 
 
 @cache
@@ -81,7 +99,7 @@ def signature_options(module: str, function: str) -> dict[str, Option]:
             first, _, rest = (ast.unparse(param.annotation) if param.annotation else "").partition(" | ")
             options[param.arg] = Option(_BUILTIN.get(first) if rest == "None" else None, nullable=True)
         else:
-            options[param.arg] = Option(type(value))
+            options[param.arg] = Option(type(value), default=value)
     return options
 
 
@@ -124,9 +142,47 @@ def route_options(route: str) -> tuple[str, dict[str, Option] | None]:
     return f"cvxpy_solve/{qp.upper()}", {**own, **{k: Option(t) for k, t in {**CVXPY_SOLVE, **settings}.items()}}
 
 
+def value_problem(key: str, value: object, kind: type | None) -> str | None:
+    """What a solver cannot use in ``value`` of the option ``key`` (of type ``kind``), in words
+    after the value, or None: NaN anywhere; a tolerance that is not a finite number > 0 (0 or less
+    is never met, inf or NaN certify anything); an iteration cap below 1, a count of refinement
+    steps below 0; a time limit that is not > 0 (or not finite, where the solver refuses inf)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return None
+    if kind is float and TOLERANCE.search(key) and not (math.isfinite(value) and value > 0):
+        return "is not allowed; a tolerance is a finite number > 0 (e.g. 1e-8)"
+    if math.isnan(value):
+        return "is not a number; give a number"
+    if kind is int and key in ITERATION_CAPS and value < 1:
+        return "is not allowed; an iteration cap is at least 1 (with less the solver stops before its first step)"
+    if kind is int and STEP_COUNT.search(key) and value < 0:
+        return "is not allowed; a number of refinement steps is at least 0 (0 switches them off)"
+    if kind is float and TIME_LIMIT.search(key):
+        finite = key in FINITE_TIME_LIMITS
+        if not value > 0 or (finite and math.isinf(value)):
+            return f"is not allowed; a time limit is a{' finite' if finite else ''} number of seconds > 0"
+    return None
+
+
+def _order_problem(where: str, options: Mapping, accepted: Mapping[str, Option]) -> str | None:
+    """A finer tolerance set above its coarser one (``ORDERED_TOLERANCES``, with the defaults)."""
+    for finer, coarser in ORDERED_TOLERANCES:
+        if finer not in accepted or coarser not in accepted or not ({finer, coarser} & set(options)):
+            continue
+        fine, coarse = options.get(finer, accepted[finer].default), options.get(coarser, accepted[coarser].default)
+        if isinstance(fine, (int, float)) and isinstance(coarse, (int, float)) and fine > coarse:
+            key = finer if finer in options else coarser
+            return (
+                f"{where}.{key}: {finer} = {fine!r} is larger than {coarser} = {coarse!r}; the final solves are at "
+                f"least as accurate as the inner ones ({finer} ≤ {coarser})"
+            )
+    return None
+
+
 def check_options(where: str, route: str, options: Mapping) -> str | None:
-    """The first problem with ``options`` of a solver ``route`` (an unknown name or a value of the
-    wrong type), as a message naming the field under ``where``, or None."""
+    """The first problem with ``options`` of a solver ``route`` (an unknown name, a value of the
+    wrong type, or one the solver cannot use: ``value_problem``, ``ORDERED_TOLERANCES``), as a
+    message naming the field under ``where``, or None."""
     if route == "cvxpy":  # the QP solver is an option itself
         options = dict(options)
         route = f"cvxpy_{options.pop('qp_solver', 'CLARABEL')}"
@@ -134,10 +190,12 @@ def check_options(where: str, route: str, options: Mapping) -> str | None:
     for key, value in (options.items() if accepted is not None else ()):
         if key not in accepted:
             return f"{where}.{key}: not an option of {function}; choose from {sorted(accepted)}"
-        kind, nullable = accepted[key]
+        kind, nullable = accepted[key].kind, accepted[key].nullable
         if kind is None or kind is object or (value is None and nullable):
             continue
         ok = (int, float) if kind is float else kind
         if not isinstance(value, ok) or (kind in (float, str) and isinstance(value, bool)):
             return f"{where}.{key}: {'null' if value is None else repr(value)} is not of type {kind.__name__}"
-    return None
+        if (problem := value_problem(key, value, kind)) is not None:
+            return f"{where}.{key}: {value!r} {problem}"
+    return _order_problem(where, options, accepted) if accepted is not None else None

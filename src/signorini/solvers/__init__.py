@@ -10,14 +10,13 @@
 
 from __future__ import annotations
 
-import numpy as np
-import scipy.sparse as sp
+from typing import TYPE_CHECKING, Any
 
-from signorini.solvers.active_set import active_set_solve
-from signorini.solvers.certificate import BadInputError, Certificate, KKTError, NotConvergedError, kkt_certificate
-from signorini.solvers.cvxpy_qp import cvxpy_solve, installed_qp_solvers
-from signorini.solvers.multigrid import multigrid_solve
-from signorini.solvers.result import SolveResult
+if TYPE_CHECKING:
+    import numpy as np
+    import scipy.sparse as sp
+
+    from signorini.solvers.result import SolveResult
 
 SOLVERS = ("active_set", "multigrid", "auto", "cvxpy")
 EXACT_SOLVERS = ("active_set", "multigrid", "auto")  # the certified active-set routes
@@ -37,7 +36,11 @@ def exact_route(name: str, n: int) -> str:
 
 def solve(name: str, A: sp.spmatrix, b: np.ndarray, constrained: np.ndarray, **options) -> SolveResult:
     """Dispatch to a solver route by name; unknown names raise ``ValueError``."""
-    name = exact_route(name, np.shape(b)[0])
+    from signorini.solvers.active_set import active_set_solve
+    from signorini.solvers.cvxpy_qp import cvxpy_solve
+    from signorini.solvers.multigrid import multigrid_solve
+
+    name = exact_route(name, len(b))
     if name == "active_set":
         return active_set_solve(A, b, constrained, **options)
     if name == "multigrid":
@@ -49,6 +52,25 @@ def solve(name: str, A: sp.spmatrix, b: np.ndarray, constrained: np.ndarray, **o
         options.pop("warm_start", None)
         return cvxpy_solve(A, b, constrained, solver=name.removeprefix("cvxpy_"), **options)
     raise ValueError(f"unknown solver {name!r}; choose one of {SOLVERS} or cvxpy_<QP solver>")
+
+
+def __getattr__(name: str) -> Any:
+    """The routes and the certificate's names, imported when first asked for: the names above
+    (the routes' names, ``exact_route``) serve the workflow's config checks, which must not pay for
+    numpy, scipy and cvxpy while Snakemake parses the workflow."""
+    if name in ("BadInputError", "Certificate", "KKTError", "NotConvergedError", "kkt_certificate"):
+        from signorini.solvers import certificate as module
+    elif name == "SolveResult":
+        from signorini.solvers import result as module
+    elif name == "active_set_solve":
+        from signorini.solvers import active_set as module
+    elif name in ("cvxpy_solve", "installed_qp_solvers"):
+        from signorini.solvers import cvxpy_qp as module
+    elif name == "multigrid_solve":
+        from signorini.solvers import multigrid as module
+    else:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(module, name)
 
 
 __all__ = [

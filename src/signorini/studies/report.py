@@ -7,8 +7,9 @@ findings) gets a page: the same Markdown, rendered to HTML (``markdown_page``), 
 ``workflow/rules/report.smk``.  A page is rendered from the file as it is, whoever wrote it: a
 committed output whose measurements are not in ``results/`` (the theory study takes an hour) is
 shown without being recomputed.  ``plan`` says per study whether its outputs were computed from
-this machine's cached results ("built here"), are the repository's committed files ("committed"),
-or are missing, and lists the report's targets.
+this machine's cached results ("built here", which needs those results intact), hold the bytes of
+the repository's committed files (git's ``HEAD``), differ from them, or are missing, and lists the
+report's targets; a damaged cached table is left out of the report, with one line naming it.
 """
 
 from __future__ import annotations
@@ -65,15 +66,20 @@ def scene_markdown(scene: str, errors_csv: str | os.PathLike, eoc_csv: str | os.
     import pandas as pd
 
     from signorini.formatting import h_label, md_table, sci_md
+    from signorini.pipeline.integrity import table_defect
     from signorini.published import label_md
 
+    if (defect := table_defect(errors_csv)) is not None:
+        return f"# Scene `{scene}`\n\n`{errors_csv}` is damaged ({defect}); `{rebuild(errors_csv)}` rebuilds it.\n"
     errors = pd.read_csv(errors_csv, encoding="utf-8")
     norms = [c for c in errors.columns if c not in ("N", "h")]
     header = ["h", *(label_md(n) for n in norms)]
     lines = [f"# Scene `{scene}`", "", f"Errors ‖u − u_h‖ (`{errors_csv}`):", ""]
     lines.append(md_table(header, [[h_label(r["N"]), *(sci_md(float(r[n])) for n in norms)]
                                    for _, r in errors.iterrows()]))
-    if eoc_csv is not None and Path(eoc_csv).exists():
+    if eoc_csv is not None and Path(eoc_csv).exists() and (defect := table_defect(eoc_csv)) is not None:
+        lines += ["", f"`{eoc_csv}` is damaged ({defect}) and not shown; `{rebuild(eoc_csv)}` rebuilds it."]
+    elif eoc_csv is not None and Path(eoc_csv).exists():
         eoc = pd.read_csv(eoc_csv, dtype={"N": str}, encoding="utf-8")
         rows = [["regr." if r["N"] == "regression" else h_label(r["N"]), *(f"{float(r[n]):.3f}" for n in norms)]
                 for _, r in eoc.iterrows()]
@@ -84,9 +90,10 @@ def scene_markdown(scene: str, errors_csv: str | os.PathLike, eoc_csv: str | os.
 def contents_markdown(studies: Sequence[Study], scenes: Sequence[str]) -> str:
     """The report's contents page: per study whether it was built here, is committed or missing."""
     lines = ["# Contents of this report", "",
-             "Per study: computed on the machine that made this report (\"built on this machine\"), or "
-             "shown from the repository's committed files (their measurements are not in this "
-             "machine's `results/`), or missing.", ""]
+             "Per study: computed on the machine that made this report from its results in `results/` "
+             "(\"built on this machine\"); or, without those results, shown as the files are: the "
+             "repository's committed files (the bytes of git's `HEAD`), or files that differ from them; "
+             "or missing.", ""]
     lines += [f"- {s.status}" for s in studies]
     lines.append(f"- scenes with their errors and EOCs: {', '.join(scenes) if scenes else 'none built'}")
     return "\n".join(lines) + "\n"
@@ -121,6 +128,16 @@ def page_stage(out: str | os.PathLike, title: str, source: str | os.PathLike | N
     elif scene is not None:
         text = scene_markdown(str(scene), str(errors_csv), eoc_csv)
     atomic_write_text(out, markdown_page(text, title))
+
+
+def page_labels(file: str, **labels: str) -> dict[str, str]:
+    """The labels of a page in the report: the ``file`` it shows (and any ``labels``), with view "page".
+
+    Snakemake's report makes one menu row (and one search row) per distinct label tuple, so a page
+    labelled like its Markdown file would replace that file's row, or the file the page's.  Only the
+    pages carry ``view``: a label column holding exactly two values, each on half the rows (page and
+    download), would be drawn as a switch over one row instead of two rows."""
+    return {**labels, "file": file, "view": "page"}
 
 
 def digest(*files: str | os.PathLike) -> str:
@@ -162,22 +179,74 @@ def _evidence(target: str, config: Mapping) -> list[str]:
 @dataclass
 class Study:
     """One target in the report: its rendering rules whose outputs exist (``rules``), those whose
-    outputs are missing (``missing``), and whether this machine computed them (``built_here``)."""
+    outputs are missing (``missing``), whether this machine computed them from intact cached
+    results (``built_here``), the damaged ones among those results (``damaged``: {file: why}), and
+    otherwise whether the outputs hold the bytes of git's ``HEAD`` (``committed``; None without git)."""
 
     target: str
     rules: list[str] = field(default_factory=list)
     missing: list[str] = field(default_factory=list)
     built_here: bool = False
+    damaged: dict[str, str] = field(default_factory=dict)
+    committed: bool | None = None
 
     @property
     def status(self) -> str:
         name, command = STUDIES[self.target]
         if not self.rules:
             return f"{name}: not in the report, nothing built (`{command}`)"
-        origin = ("built on this machine" if self.built_here
-                  else f"the repository's committed files, not computed on this machine (`{command}` computes them)")
+        if self.built_here:
+            origin = "built on this machine"
+        elif self.committed:
+            origin = (f"the repository's committed files (the bytes of git's HEAD), not computed on this machine "
+                      f"(`{command}` computes them)")
+        elif self.committed is None:
+            origin = (f"the files as found, not computed from this machine's results; without git, whether they are "
+                      f"the committed files is not known (`{command}` computes them)")
+        else:
+            origin = (f"files that differ from the repository's committed ones (computed or edited here), without "
+                      f"their intact results in results/ (`{command}` recomputes them)")
         missing = f"; missing: {', '.join(self.missing)} (`{command}`)" if self.missing else ""
         return f"{name}: {origin}{missing}"
+
+
+def rebuild(path: str | os.PathLike) -> str:
+    """The command that rebuilds a cached artifact."""
+    return f"snakemake -c2 {path}"
+
+
+def damaged(root: str | os.PathLike, files: Sequence[str]) -> dict[str, str]:
+    """{file: why} of the ``files`` (patterns with ``*`` allowed) under ``root`` that exist and fail
+    their integrity check: a scene table's defect (``integrity.table_defect``), any other
+    artifact's checksum (``integrity.artifact_ok``)."""
+    from signorini.pipeline.integrity import artifact_ok, table_defect
+
+    root, found = Path(root), {}
+    for pattern in files:
+        for path in sorted(root.glob(pattern)) if "*" in pattern else [root / pattern]:
+            if not path.is_file():
+                continue
+            why = table_defect(path) if path.suffix == ".csv" else None if artifact_ok(path) else "fails its checksum"
+            if why is not None:
+                found[str(path.relative_to(root))] = why
+    return found
+
+
+def same_as_head(root: str | os.PathLike, files: Sequence[str]) -> bool | None:
+    """Whether ``files`` (relative to ``root``) hold the bytes git's ``HEAD`` has for them: False
+    when one is not in ``HEAD`` or differs; None without git or a repository."""
+    import subprocess
+
+    def git(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run(["git", "-C", str(root), *args, "--", *files], capture_output=True, encoding="utf-8")
+
+    try:
+        tracked, diff = git("ls-tree", "-r", "--name-only", "HEAD"), git("diff", "--quiet", "HEAD")
+    except OSError:
+        return None
+    if tracked.returncode != 0 or diff.returncode not in (0, 1):
+        return None
+    return set(tracked.stdout.splitlines()) >= set(files) and diff.returncode == 0
 
 
 def _exists(root: Path, files: Sequence[str]) -> bool:
@@ -200,14 +269,27 @@ def plan(root: str | os.PathLike = ".", config: Mapping | None = None) -> list[S
             needed = [rule, *paths.RENDER_INPUTS.get(rule, ())]
             ok = all(_exists(root, list(paths.FIGURES[r].values())) for r in needed)
             (study.rules if ok else study.missing).append(rule)
-        study.built_here = bool(study.rules) and _exists(root, _evidence(target, config))
+        if study.rules:  # the evidence of a study with nothing to show is not asked for (its scene may be gone)
+            evidence = _evidence(target, config)
+            study.damaged = damaged(root, evidence)
+            study.built_here = _exists(root, evidence) and not study.damaged
+        if study.rules and not study.built_here:
+            study.committed = same_as_head(root, [f for rule in study.rules for f in paths.FIGURES[rule].values()])
         studies.append(study)
     return studies
 
 
+def scene_tables(config: Mapping) -> list[str]:
+    """Every configured scene's ``errors.csv`` and ``eoc.csv``."""
+    return [paths.PATHS[key].format(scene=s) for s in config["scenes"] for key in ("errors_csv", "eoc_csv")]
+
+
 def built_scenes(root: str | os.PathLike, config: Mapping) -> list[str]:
-    """The configured scenes whose ``errors.csv`` exists (each gets a page of its tables)."""
-    return [s for s in config["scenes"] if (Path(root) / paths.PATHS["errors_csv"].format(scene=s)).exists()]
+    """The configured scenes whose ``errors.csv`` exists and is intact (each gets a page of its tables)."""
+    return [
+        s for s in config["scenes"]
+        if (Path(root) / (table := paths.PATHS["errors_csv"].format(scene=s))).exists() and not damaged(root, [table])
+    ]
 
 
 def pages(root: str | os.PathLike, studies: Sequence[Study], config: Mapping) -> list[str]:
@@ -237,6 +319,9 @@ def build(out: str = "results/report.html", config_path: str = "workflow/config.
     config = load_yaml(config_path)
     studies = plan(".", config)
     scenes = built_scenes(".", config)
+    broken = {**damaged(".", scene_tables(config)), **{f: why for s in studies for f, why in s.damaged.items()}}
+    for path, why in broken.items():  # left out of the report; the rest is reported
+        print(f"skipped {path}: damaged ({why}); `{rebuild(path)}` rebuilds it")
     print(f"{out} shows:")
     for s in studies:
         print(f"  {s.status}")
