@@ -45,6 +45,16 @@ def refused(config: dict) -> str:
     return message
 
 
+def refused_with(path: tuple, value: object) -> str:
+    """The one line refusing the shipped config with ``value`` at ``scenes.<path>``."""
+    config = shipped()
+    target = config["scenes"]
+    for key in path[:-1]:
+        target = target[key]
+    target[path[-1]] = value
+    return refused(config)
+
+
 def with_smoke(**changes) -> dict:
     config = shipped()
     config["scenes"]["smoke"].update(copy.deepcopy(changes))
@@ -214,12 +224,7 @@ def test_every_shipped_scene_resolves_its_support():
 def test_nan_and_infinite_tolerances_are_refused_wherever_they_are(where, value, fragments):
     """NaN passes every bound of the schema (each comparison is false): refused anywhere; a
     study's tolerances are finite and positive like a solver's."""
-    config = shipped()
-    target = config["scenes"]["work_precision"]
-    for key in where[:-1]:
-        target = target[key]
-    target[where[-1]] = value
-    message = refused(config)
+    message = refused_with(("work_precision", *where), value)
     assert all(f in message for f in fragments), message
 
 
@@ -299,12 +304,7 @@ def test_scene_names_that_cannot_be_paths_are_refused(name, fragments):
     ],
 )
 def test_schema_errors_are_one_line_naming_field_value_and_what_is_allowed(path, value, fragments):
-    config = shipped()
-    target = config["scenes"]["smoke"]
-    for key in path[:-1]:
-        target = target[key]
-    target[path[-1]] = value
-    message = refused(config)
+    message = refused_with(("smoke", *path), value)
     assert all(f in message for f in fragments), message
 
 
