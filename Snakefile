@@ -17,7 +17,7 @@ os.environ.update(
 from signorini.pipeline.jobenv import single_threaded
 
 single_threaded()  # one BLAS/OpenMP thread per job unless the caller says otherwise (jobs inherit it)
-from signorini.pipeline import patches
+from signorini.pipeline import paths, patches
 
 # Snakemake's scheduler would start one more re-evaluation timer chain per finished job, a main
 # loop spinning ever faster during a long run: keep one timer pending (every patch of Snakemake's
@@ -52,7 +52,9 @@ sys.modules.setdefault("rfc3987_syntax", None)
 # one line naming the field, the value and what is allowed; also fills in the schema's defaults
 # (diagonal, solver_options, conventions, figures_scene)
 with one_line_errors():
-    validate_config(config, os.path.join(workflow.basedir, SCHEMA))
+    validate_config(
+        config, os.path.join(workflow.basedir, SCHEMA), memo=paths.VALIDATED_CONFIG
+    )
 
 
 report: "workflow/report/workflow.rst"

@@ -9,8 +9,9 @@ turn, ``--repeats`` rounds (A B C A B C ...), each's wall and CPU seconds record
 - ``noop``: ``snakemake -c2 all`` on the built cache ("Nothing to be done"): this workflow's
   parse, config checks, DAG and cache check.
 
-The ratios noop/floor and noop/trivial are taken round by round (the commands of one round ran
-back to back), reported as median with min and max.  Written to ``docs/evidence/noop_floor.json``:
+With ``--compare DIR`` (a built copy of another revision) its no-op runs in the same rounds
+(``noop_compared``).  The ratios are taken round by round (the commands of one round ran back
+to back), reported as median with min and max.  Written to ``docs/evidence/noop_floor.json``:
 
     python benchmarks/noop_floor.py [--repo DIR] [--repeats 9]
 """
@@ -66,6 +67,7 @@ def summary(values: list[float]) -> dict:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repo", type=Path, help="a copy of the checkout with `all` built (default: build one)")
+    parser.add_argument("--compare", type=Path, help="a built copy of another revision: its no-op, in the same rounds")
     parser.add_argument("--repeats", type=int, default=9)
     parser.add_argument("--out", type=Path, default=ROOT / "docs/evidence/noop_floor.json")
     args = parser.parse_args()
@@ -80,12 +82,16 @@ def main() -> int:
             "trivial": (trivial, ["-c1", "--workflow-profile", "none"]),
             "noop": (repo, ["-c2", "all"]),
         }
+        if args.compare:
+            commands["noop_compared"] = (args.compare, ["-c2", "all"])
+            timed(args.compare, "-c2", "all")
         timed(repo, "-c2", "all")  # warm-up: the import cache of the code inputs, the page cache
         rounds = []
         for _ in range(args.repeats):
             run = {name: timed(cwd, *argv) for name, (cwd, argv) in commands.items()}
-            if "Nothing to be done" not in run["noop"]["out"]:
-                raise RuntimeError(f"not a no-op:\n{run['noop']['out'][-2000:]}")
+            for name in ("noop", "noop_compared"):
+                if name in run and "Nothing to be done" not in run[name]["out"]:
+                    raise RuntimeError(f"not a no-op:\n{run[name]['out'][-2000:]}")
             rounds.append({name: {k: v for k, v in r.items() if k != "out"} for name, r in run.items()})
     result = {
         "machine": {"cpus": os.cpu_count(), "processor": platform.processor() or platform.machine()},
@@ -94,6 +100,19 @@ def main() -> int:
         "cpu_s": {name: summary([r[name]["cpu_s"] for r in rounds]) for name in commands},
         "noop_over_floor_wall": summary([r["noop"]["wall_s"] / r["floor"]["wall_s"] for r in rounds]),
         "noop_over_trivial_wall": summary([r["noop"]["wall_s"] / r["trivial"]["wall_s"] for r in rounds]),
+        **(
+            {
+                "compared": str(args.compare),
+                "noop_compared_over_floor_wall": summary(
+                    [r["noop_compared"]["wall_s"] / r["floor"]["wall_s"] for r in rounds]
+                ),
+                "noop_compared_over_noop_wall": summary(
+                    [r["noop_compared"]["wall_s"] / r["noop"]["wall_s"] for r in rounds]
+                ),
+            }
+            if args.compare
+            else {}
+        ),
         "load1_before": summary([r[name]["load1_before"] for r in rounds for name in commands]),
         "rounds": rounds,
     }

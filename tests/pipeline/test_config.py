@@ -518,3 +518,22 @@ def test_unknown_figures_scene_is_rejected():
     config["figures_scene"] = "nope"
     with pytest.raises(ConfigError, match="figures_scene"):
         validate(config)
+
+
+def test_a_memoised_validation_gives_the_same_config_and_never_hides_an_error(tmp_path, monkeypatch):
+    """The second workflow start with an unchanged config takes the validated config (defaults
+    filled in) from the memo without validating; a changed config, schema or check is validated
+    again, so an error is never hidden by the memo."""
+    import signorini.pipeline.config as cfg
+
+    memo = tmp_path / "validated.json"
+    first, second = shipped(), shipped()
+    cfg.validate_config(first, SCHEMA, memo=memo)
+    monkeypatch.setattr(cfg, "_defaults_validator", lambda: pytest.fail("validated again"))
+    cfg.validate_config(second, SCHEMA, memo=memo)
+    assert second == first and second["scenes"]["smoke"]["diagonal"] == "sw_ne"
+    monkeypatch.undo()
+    bad = shipped()
+    bad["scenes"]["smoke"]["N"] = [11, 21.5]
+    with pytest.raises(ConfigError, match=r"scenes\.smoke\.N\[1\]"):
+        cfg.validate_config(bad, SCHEMA, memo=memo)

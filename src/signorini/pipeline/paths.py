@@ -50,6 +50,8 @@ BENCHMARKS = {
 # the PETSc peers' driver: an external program (stdlib, numpy, petsc4py), a code input of its jobs
 PEER_DRIVER = "workflow/peers/petsc_peer.py"
 IMPORT_CACHE = ".snakemake/signorini/imports.json"  # codedeps.ImportCache: each file's direct imports
+# config.validate_config: the last validated config, keyed by the digest of the config, schema and checks
+VALIDATED_CONFIG = ".snakemake/signorini/validated-config.json"
 
 REFERENCES = {
     "paper_table1": f"{REFERENCE}/paper_table1.csv",
