@@ -53,11 +53,11 @@ def check_arguments(args: argparse.Namespace) -> tuple[Problem, list[str]]:
         check_mesh_size,
         check_norm_names,
     )
-    from signorini.pipeline.resources import machine_mem_mb
+    from signorini.pipeline.resources import usable_memory
 
     try:
         check_mesh_size("--N", args.N)
-        check_memory("--N", args.N, machine_mem_mb(), "of this machine")
+        check_memory("--N", args.N, *usable_memory())  # the machine's, its cgroup's or ulimit's
         names = [] if args.norms is None else [n.strip() for n in args.norms.split(",")]
         if args.norms is not None:  # given, so at least one name: --norms '' is an error
             names = [] if names == [""] else names
