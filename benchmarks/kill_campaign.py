@@ -1,20 +1,20 @@
 """Kill campaign: random SIGINT / SIGTERM to a running scene, then recovery, then a comparison
 with an uninterrupted build.
 
-In a temporary copy of the repository (Snakefile, workflow/, src/) the scene's chain
+In a temporary copy of the repository (Snakefile, workflow/, src/, profiles/) the scene's chain
 (``results/<scene>/eoc.csv``: discretise -> solve -> norms -> errors -> eoc) is built once without
-interruption (the reference).  In a second copy the same target is started again and again; each
-run is sent SIGINT (Ctrl-C) or SIGTERM (a scheduler's stop), to its whole process group, after a
-random delay, until ``--kills`` runs were interrupted, with a random artifact of the scene removed
-whenever a run got to the end first (so that there is always work to interrupt).  After every
-kill no file under its final name may fail its integrity check.  A run that stops with Snakemake's
-IncompleteFilesException (outputs of killed jobs still marked incomplete in .snakemake) is followed
-by one with ``--rerun-incomplete``, as Snakemake tells the user; a run still alive ``GRACE_S``
-after its signal is killed with SIGKILL (and unlocked), and counted.  Then one run recovers, and every
-artifact must equal the reference: tables and archives byte for byte, the JSON sidecars as data
-without what they record about the run (wall times, the machine's load: ``RUN_DEPENDENT``).  Each
-run's console is kept and counted (lines, bytes, tracebacks, ``interrupted:`` lines): what a user
-sees after Ctrl-C.
+interruption (the reference). In a second copy the same target is started again and again; each run
+is sent SIGINT (Ctrl-C) or SIGTERM (a scheduler's stop), to its whole process group, after a random
+delay, until ``--kills`` runs were interrupted, with a random artifact of the scene (and what was
+computed from it) removed whenever a run got to the end first (so that there is always work to
+interrupt). After every kill no file under its final name may fail its integrity check. A run that
+stops with Snakemake's IncompleteFilesException (outputs of killed jobs still marked incomplete in
+.snakemake) is followed by one with ``--rerun-incomplete``, as Snakemake tells the user; a run
+still alive ``GRACE_S`` after its signal is killed with SIGKILL (and unlocked), and counted. Then
+one run recovers, and every artifact must equal the reference: tables and archives byte for byte,
+the JSON sidecars as data without what they record about the run (wall times, the machine's load:
+``RUN_DEPENDENT``). Each run's console is kept and counted (lines, bytes, tracebacks,
+``interrupted:`` lines): what a user sees after Ctrl-C.
 
     python benchmarks/kill_campaign.py --kills 15 --out docs/evidence/kill_campaign.json
 """
@@ -66,6 +66,22 @@ def start(repo: Path, target: str, console: Path, *extra: str) -> subprocess.Pop
         )
 
 
+def downstream(repo: Path, scene: str, removed: str) -> list[Path]:
+    """``removed`` and everything of the chain computed from it (a mesh's solution and norms after
+    its system, its norms after its solution; the scene's tables after anything), so that the next
+    run has to recompute it: Snakemake rebuilds a missing file only when a job needs it."""
+    base = repo / "results" / scene
+    mesh = Path(removed).parent if "norms" not in removed else Path(removed).parent.parent
+    later = {"system": ("system", "solution", "norms"), "solution": ("solution", "norms")}
+    kind = Path(removed).stem
+    found = [repo / removed]
+    if kind in later:
+        found += [p for p in (repo / mesh).rglob("*") if p.is_file() and p.relative_to(repo / mesh).parts[0]
+                  .split(".")[0] in later[kind] and p != repo / removed]
+    found += [base / name for name in ("errors.csv", "eoc.csv") if (base / name).exists()]
+    return sorted({p for p in found if p.exists()})
+
+
 def console_summary(console: Path) -> dict:
     """What the user saw of a run: lines, bytes, tracebacks, and the one-line interrupt notice."""
     text = console.read_text(encoding="utf-8", errors="replace")
@@ -89,9 +105,9 @@ def artifacts(repo: Path, scene: str) -> dict[str, Path]:
     return found
 
 
-# what a JSON sidecar records about the run rather than the result: wall times and the machine's
-# load when the job started (system.json's load1)
-RUN_DEPENDENT = ("timings", "load1", "summary.wall_time_s")
+# what a JSON sidecar records about the run rather than the result: wall times (of the solve, and
+# of each Newton step in its history) and the machine's load when the job started (system.json's load1)
+RUN_DEPENDENT = ("timings", "load1", "summary.wall_time_s", "summary.history[].elapsed_s")
 
 
 def comparable(path: Path) -> bytes | dict:
@@ -102,10 +118,12 @@ def comparable(path: Path) -> bytes | dict:
     data = load_json(path)
     for key in RUN_DEPENDENT:
         *parents, leaf = key.split(".")
-        node = data
-        for parent in parents:
-            node = node.get(parent, {})
-        node.pop(leaf, None)
+        nodes = [data]
+        for parent in parents:  # "name[]": every row of the list under name
+            rows = [node.get(parent.removesuffix("[]"), {}) for node in nodes]
+            nodes = [row for rows_ in rows for row in rows_] if parent.endswith("[]") else rows
+        for node in nodes:
+            node.pop(leaf, None)
     return data
 
 
@@ -132,7 +150,8 @@ def campaign(repo: Path, scene: str, kills: int, rng: random.Random, delay: tupl
         removed = None
         if (repo / target).exists():  # the last run finished: give the next one work to interrupt
             removed = rng.choice(sorted(p for p in artifacts(repo, scene) if p.endswith((".npz", ".json", ".csv"))))
-            (repo / removed).unlink()
+            for path in downstream(repo, scene, removed):  # what was computed from it: work to redo
+                path.unlink()
         name = rng.choice(sorted(SIGNALS))
         after = round(rng.uniform(*delay), 1)
         console = repo.parent / f"console-{len(rounds)}.txt"

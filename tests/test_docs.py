@@ -7,6 +7,9 @@ A name in backticks is checked when it has the shape of a reference: a repositor
 (``tests/test_x.py::test_name``, or ``test_name`` alone: in some test module).  Templates
 (``<scene>``), globs and what the pipeline writes under git-ignored directories (``results/``,
 ``.venv/``) are not files of the repository and are skipped.
+
+docs/glossary.md defines the internal names (``GLOSSARY_TERMS``) that the pages and the outputs in
+paper_figures/ mention.
 """
 
 from __future__ import annotations
@@ -143,3 +146,67 @@ def test_every_docs_page_is_linked_from_the_readme():
 
 def test_the_readme_is_short():
     assert len((ROOT / "README.md").read_text(encoding="utf-8").splitlines()) <= 150
+
+
+# Internal names of the outputs (paper_figures/*.md) and the pages (docs/*.md): each that a page
+# mentions in backticks must be a term of docs/glossary.md (a bold term or a heading there).
+GLOSSARY = ROOT / "docs" / "glossary.md"
+GLOSSARY_TERMS = (
+    # the problem and the mesh
+    "sw_ne", "nw_se", "A_FF",
+    # norms: the grammar, the suffixes, the conventions and their quadrature rules
+    "Lp", "L2", "L4", "L16", "L32", "Linf", "W1p", "W12", "W14", "W116", "W132", "W1inf", "H1", "H12", "L2boundary",
+    "L4plus", "L4minus", "plus", "minus", "_true", "_raw", "Conventions", "stroud4_acute1", "stroud4_acute2",
+    "stroud4_right", "dunavant8", "components", "h12_boundary",
+    # solvers
+    "active_set", "multigrid", "auto", "kkt_tol", "vinewtonrsls", "vinewtonssls", "ok", "inaccurate", "failed",
+    "skipped",
+    # studies
+    "algebraic_error", "theory_rates", "theory_extra", "cost_of_accuracy", "time_s", "wall_s", "time_ref", "ref_s",
+    "load1", "spread", "cond_max_dofs",
+    # the workflow
+    "scene_defaults", "figures_scene", "norm_jobs", "per_norm", "per_mesh", "solver_options", "paper", "smoke",
+    "case2", "fine", "theory", "work_precision", "stability",
+)
+
+
+def _backticked_names(page: Path) -> set[str]:
+    """The identifiers inside a page's backtick spans, templates left out: `*_raw` holds `_raw`,
+    `<norm>_true` holds `_true`, `signorini.fem.norms.conventions.Conventions` holds `Conventions`."""
+    return {
+        name
+        for span in _spans(page.read_text(encoding="utf-8"))
+        for name in re.findall(r"[A-Za-z_]\w*", re.sub(r"<[^<>]*>", "", span))
+    }
+
+
+def _glossary_entries(text: str) -> set[str]:
+    """The terms a glossary defines: its bold terms and headings, without their backticks."""
+    terms = re.findall(r"\*\*(.+?)\*\*", text) + re.findall(r"^#+\s+(.+?)\s*$", text, re.M)
+    return {term.strip().strip("`") for term in terms}
+
+
+def _undefined_terms(pages, glossary_text: str, terms=GLOSSARY_TERMS) -> dict[str, list[str]]:
+    """{term: the pages that mention it} for each listed term the pages mention but the glossary
+    does not define."""
+    entries = _glossary_entries(glossary_text)
+    mentions = {page: _backticked_names(page) for page in pages}
+    return {
+        term: [page.name for page, names in mentions.items() if term in names]
+        for term in terms
+        if term not in entries and any(term in names for names in mentions.values())
+    }
+
+
+def test_the_glossary_defines_every_internal_name_the_outputs_and_pages_use():
+    pages = [p for p in PAGES[1:] if p != GLOSSARY] + sorted((ROOT / "paper_figures").glob("*.md"))
+    assert any(set(GLOSSARY_TERMS) & _backticked_names(p) for p in pages), "no listed term found: the check is blind"
+    missing = _undefined_terms(pages, GLOSSARY.read_text(encoding="utf-8"))
+    assert not missing, f"terms without an entry (bold term or heading) in docs/glossary.md: {missing}"
+
+
+def test_the_glossary_check_finds_an_undefined_term(tmp_path):
+    page = tmp_path / "page.md"
+    page.write_text("The `sw_ne` mesh, columns `*_raw`, the `<norm>_true` norms and `per_mesh` jobs.", encoding="utf-8")
+    glossary = "# Glossary\n\n- **`sw_ne`**: the / diagonal.\n- **`_true`**, **`_raw`**: suffixes.\n"
+    assert _undefined_terms([page], glossary) == {"per_mesh": ["page.md"]}
