@@ -305,3 +305,18 @@ def test_an_unknown_scene_or_norm_in_a_target_is_one_line(monkeypatch):
         h, out = handler(dryrun=dryrun)
         h.emit(record(UNKNOWN_SCENE, level=logging.ERROR, event=LogEvent.ERROR, exception="InputFunctionException"))
         assert out.getvalue() == line + "\n"
+
+
+def test_a_job_ended_by_ctrl_c_before_snakemake_saw_it_is_the_one_line(monkeypatch):
+    """Under load a job's quiet exit (status 130) can reach Snakemake before its own process handles
+    the signal: the one interrupt line, not the failed job's error block; any other failure is
+    printed as Snakemake prints it."""
+    monkeypatch.setattr(console, "command_line", lambda argv: (["all"], True))
+    h, out = handler()
+    failed = "CalledProcessError in file x: Command '...' returned non-zero exit status {}."
+    h.emit(record(failed.format(1), level=logging.ERROR))
+    assert "exit status 1." in out.getvalue() and not h.interrupted
+    h.emit(record(failed.format(130), level=logging.ERROR))
+    h.emit(record("Error in rule discretise", level=logging.ERROR, event=LogEvent.JOB_ERROR))
+    lines = out.getvalue().splitlines()
+    assert h.interrupted and lines[-1].startswith("interrupted: ") and "exit status 130" not in out.getvalue()

@@ -36,6 +36,9 @@ CHATTER = re.compile(
     r"Removing temporary output|Touching output file|Waiting at most)"
 )
 INTERRUPT = ("Terminating processes on user request", "Cancelling snakemake on user request")
+# how Snakemake reports a job that ended by Ctrl-C: 128 + SIGINT, the status the package's jobs exit
+# with (signorini.pipeline.joblog.INTERRUPTED)
+JOB_INTERRUPTED = f"non-zero exit status {128 + signal.SIGINT}."
 # Snakemake's block for an exception raised in an input, params or resources function: its cause,
 # message and the job's wildcards
 INPUT_FUNCTION_ERROR = re.compile(r"^Error:\n  (\w+): (.*)\nWildcards:\n((?:  \w+=.*\n?)*)", re.MULTILINE)
@@ -335,6 +338,11 @@ class LogHandler(LogHandlerBase):
         if self.interrupted:
             return  # after Ctrl-C: the one line is printed, the jobs' SIGINT errors are not
         if any(text.startswith(m) for m in INTERRUPT) or event == LogEvent.ERROR and "KeyboardInterrupt" in text:
+            self.interrupt()
+            return
+        if record.levelno >= logging.ERROR and JOB_INTERRUPTED in text:
+            # a job ended by Ctrl-C (the package's quiet exit status) before Snakemake's own
+            # process saw the signal (seen under load): the same one line, not its error block
             self.interrupt()
             return
         if event == LogEvent.JOB_INFO:

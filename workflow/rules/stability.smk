@@ -53,6 +53,16 @@ rule stability_atlas:
     params:
         norms=lambda wc: list(atlas_of(STAB).norms),
         solvers=lambda wc: list(atlas_of(STAB).solvers),
+        # each column's route, options and tolerance: what the report's explanations read
+        solver_specs=lambda wc: {
+            label: {
+                "label": spec.label,
+                "solver": spec.solver,
+                "options": dict(spec.options),
+                "kkt_tol": spec.kkt_tol,
+            }
+            for label, spec in atlas_of(STAB).solvers.items()
+        },
     script:
         "../scripts/stability_atlas.py"
 

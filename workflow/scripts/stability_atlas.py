@@ -7,4 +7,4 @@ snakemake = globals()["snakemake"]  # injected by the script: directive
 
 with job_log(snakemake):
     p, i = snakemake.params, snakemake.input
-    atlas_stage(p.norms, p.solvers, i.jsons, i.npzs, snakemake.output)
+    atlas_stage(p.norms, p.solvers, i.jsons, i.npzs, snakemake.output, p.solver_specs)

@@ -9,7 +9,8 @@ import os
 from collections.abc import Mapping, Sequence
 
 from signorini.fem.mesh import DEFAULT_DIAGONAL
-from signorini.studies.stability.atlas import CORRUPTIONS, GROUPS, STATUSES
+from signorini.studies.stability.atlas import CORRUPTIONS, GROUPS, STATUSES, SolverSpec
+from signorini.studies.stability.findings import SAME_SOLUTION_RTOL, discussion, exact_columns, same_solution_limit
 
 
 def _fmt(x, digits: int = 1) -> str:
@@ -82,15 +83,71 @@ INTRO = (
     "**inaccurate** = finite but above it; **failed** = "
     "exception, time limit, crash, or NaN/Inf (the reason is recorded). Errors are relative to ‖u‖ in "
     "the same norm (absolute where ‖u‖ = 0 in that norm). κ₂ from ARPACK's extreme eigenvalues "
-    "(Lanczos; shift-invert at σ = −1e-10 λ_max), A = K + cM the whole matrix, A_FF its block on the "
+    "(Lanczos; shift-invert with shift −1e-10 λ_max), A = K + cM the whole matrix, A_FF its block on the "
     "free nodes of the exact solution (not estimated above `cond_max_dofs` unknowns). Columns "
     "`*_raw`: the cvxpy route as shipped (the QP solvers' "
     "absolute tolerances); the other cvxpy columns use `normalize=True` (A/max A_ii, u/‖u_D‖∞: "
     "`solvers.cvxpy_qp`). Δu vs exact = ‖u − u_active_set‖∞/‖u_active_set‖∞ on the same mesh."
 )
 
+# every symbol and term of the page, defined once (the same letter means one thing per context)
+NOTATION = [
+    "## Notation",
+    "",
+    "- Problem: −Δu + c u = f in the unit square Ω with the Signorini conditions u ≥ 0, ∂_ν u ≥ 0, u ∂_ν u = "
+    "0 on its boundary ∂Ω (∂_ν, written du/dn in a note, the outward normal derivative); u the exact "
+    "solution, f the data.",
+    "- Case headers: N, A, R, c, x0 of the paper's manufactured solution u = A ψ(r) ũ: amplitude A, reaction "
+    "c, and R the radius of the cut-off ψ around the free point (x0, 0) of the bottom edge, left of which u >"
+    " 0 and right of which u = 0 there; kind = constant: f ≡ value, u ≡ value/c (no contact); kind = "
+    "full_contact: u = −A sin πx sin πy (contact on all of ∂Ω); t in a note: any number; semicoercive (pure "
+    "Signorini): c = 0, the Laplacian alone, whose matrix K is singular (K 1 = 0 for the vector 1 of ones).",
+    "- Mesh: N cells per side, h = 1/N, each square cut along its sw_ne diagonal (nw_se: the other one); "
+    "jitter moves interior nodes by up to that fraction of h. The 4N boundary nodes form B, the constrained "
+    "nodes.",
+    "- Discrete problem: P1 finite elements (continuous, linear on each triangle); u_h the discrete solution "
+    "a column returns (written u in the residuals, Δu and Δ(u/A); in the errors u is the exact solution), K "
+    "the stiffness and M the mass matrix, A = K + cM the system matrix (in a case header A is the amplitude),"
+    " A_ii its diagonal entries, Aᵀ its transpose, b the load vector. u_h minimises ½ uᵀAu − bᵀu subject to "
+    "u_i ≥ 0 for i in B; the KKT (Karush–Kuhn–Tucker) conditions read A u − b = λ with the multiplier λ (the "
+    "discrete contact force) zero off B, u_B ≥ 0, λ_B ≥ 0 and u_i λ_i = 0.",
+    "- Contact: a node i of B is in contact (active) when u_i = 0 (the exact routes: in the contact set they "
+    "end with; the cvxpy columns: u_i ≤ 1e-8 ‖u‖∞), biactive when u_i = 0 and λ_i = 0 (strict "
+    "complementarity, u_i + λ_i > 0, fails there). F is the set of nodes outside the exact solution's contact"
+    " set, A_FF the block of A and u_F, b_F the entries of u, b on F; n/m in contact: the exact solver's "
+    "contact nodes among the m = 4N of B.",
+    "- Certificate (`solvers.certificate`): with σ = max(‖A u‖∞, ‖b‖∞) the relative residuals are "
+    "stationarity ‖A u − b − λ‖∞/σ, primal max(0, −min u_B)/‖u‖∞, dual max(0, −min λ_B)/σ and complementarity"
+    " max_i |u_i λ_i|/(‖u‖∞ σ); KKT in a case line is the largest. ‖·‖∞ is the maximum norm (of a matrix: its"
+    " largest row sum of absolute values), |A| the matrix of the entries' absolute values, ε = 2⁻⁵² ≈ 2.2e-16"
+    " the spacing of doubles at 1 (round-off: the error of floating-point arithmetic, of relative size ε), "
+    "and 16 ε ‖|A||u|‖∞/σ the rounding floor: the accuracy, relative to σ, to which A u − b can be evaluated."
+    " The KKT threshold is the larger of the tolerance and the floor (the floor capped at 1e-6).",
+    "- Columns: active_set, the primal–dual active-set method with sparse direct solves, started from the "
+    "solution on a coarser mesh (the cascade); active_set_cold, the same without that start; multigrid, the "
+    "same iteration with conjugate gradients preconditioned by multigrid (cascade start); multigrid_cold, "
+    "from A and b alone (nested iteration). These four are the exact routes. clarabel is an interior-point "
+    "method (its iterates keep u_i > 0 and λ_i > 0 on B), osqp and scs are ADMM (alternating direction method"
+    " of multipliers, a first-order splitting method); all three are called through the modelling layer "
+    "cvxpy. normalize=True hands them A/max A_ii and b scaled so that u is divided by ‖u_D‖∞, u_D the "
+    "solution with u = 0 on B (an estimate of ‖u‖∞ that is linear in the data); *_raw: as shipped.",
+    "- Case lines: it = iterations (the exact routes' active-set steps, the QP solver's iterations); err L4 /"
+    " W14 / H12 = ‖u − u_h‖/‖u‖ in L⁴(Ω), W^{1,4}(Ω) and H^{1/2}(∂Ω), (abs.) ‖u − u_h‖ where ‖u‖ = 0; Δu vs "
+    "exact is absolute where u_active_set = 0; vs REF: Δ(u/A) = ‖u_h/A − u_h^ref/A_ref‖∞ / ‖u_h^ref/A_ref‖∞ "
+    "against the solution u_h^ref of the reference case REF, of amplitude A_ref, and whether the contact sets"
+    " are equal; κ₂(X) = λ_max(X)/λ_min(X), the ratio of the extreme eigenvalues of a symmetric matrix X (∞ "
+    "when it is singular; these λ are eigenvalues, not the multiplier), estimated by ARPACK (the sparse "
+    "eigenvalue library behind scipy): Lanczos iteration for λ_max, the same on (X − s I)⁻¹ (shift-invert "
+    "with shift s) for λ_min; max relative change of the errors: |err − err_ref|/err_ref over the norms.",
+    "- Bad input: NaN and Inf are the floating-point not-a-number and infinity; diag(A) is the diagonal "
+    "matrix of A_ii, and a Cholesky factorisation A = L Lᵀ (L lower triangular) exists only for a positive "
+    "definite matrix; B = ∅: no constrained node. BadInputError and ProblemParameterError are the errors the "
+    "solvers raise for such data.",
+    "",
+]
 
-def _summary(df) -> list[str]:
+
+def _summary(df, specs: Mapping[str, SolverSpec] | None = None) -> list[str]:
     """Counts, NaN/Inf runs and the exact solver's unexpected outcomes."""
     counts = ", ".join(f"{(df['status'] == s).sum()} {s}" for s in STATUSES)
     lines = [
@@ -104,33 +161,34 @@ def _summary(df) -> list[str]:
     bad = exact[~exact["as_expected"].astype(bool)]
     which = ", ".join(f"{r.case} ({r.status}: {r.reason})" for r in bad.itertuples()) if len(bad) else "none"
     lines.append(f"- Exact solver (active_set) not as expected: {which}.")
-    return lines + _exact_columns(df)
+    return lines + _exact_columns(df, specs)
 
 
-SAME_SOLUTION_RTOL = 1e-12  # max |Δu| ≤ SAME_SOLUTION_RTOL · max |u|: the same discrete solution
+def _verdict(df, compared, at, specs: Mapping[str, SolverSpec] | None) -> str:
+    """Δu vs exact against SAME_SOLUTION_RTOL, raised to a case's rounding floor where the CSV records one:
+    a difference below the floor is not resolved by the certificate (``findings.at_rounding_floor``)."""
+    rows = compared.iterrows()
+    above = [r["case"] for _, r in rows if r["diff_to_active_set"] > same_solution_limit(df, r, specs)[0]]
+    if above:
+        return f"ABOVE {SAME_SOLUTION_RTOL:g} and any recorded rounding floor in {', '.join(above)}"
+    if compared.loc[at, "diff_to_active_set"] <= SAME_SOLUTION_RTOL:
+        return f"within {SAME_SOLUTION_RTOL:g}"
+    floor = same_solution_limit(df, compared.loc[at], specs)[1]
+    return f"above {SAME_SOLUTION_RTOL:g} but at the rounding floor of that case ({_fmt(floor)})"
 
 
-def _exact_columns(df) -> list[str]:
+def _exact_columns(df, specs: Mapping[str, SolverSpec] | None = None) -> list[str]:
     """The other certified columns (cold start, multigrid) against active_set on the same case:
     they must return the same discrete solution, not merely a certified one."""
-    from signorini.pipeline.solver_options import exact_routes
-
-    if "route" not in df:
-        return []
-    others = df[df["route"].isin(exact_routes()) & (df["solver"] != "active_set")]
     parts = []
-    for solver, sub in others.groupby("solver", sort=False):
-        compared = sub[sub["diff_to_active_set"].notna()]
-        if compared.empty:
-            continue
+    for solver, compared in exact_columns(df).groupby("solver", sort=False):
         differ = compared[~compared["same_contact_as_active_set"].astype(bool)]["case"].tolist()
         contact = "the same contact set in all" if not differ else f"a different contact set in {', '.join(differ)}"
         at = compared["diff_to_active_set"].idxmax()
-        worst = compared.loc[at, "diff_to_active_set"]
-        verdict = "within" if worst <= SAME_SOLUTION_RTOL else "ABOVE"
         parts.append(
             f"{solver} ({len(compared)} cases, {int((compared['status'] == 'ok').sum())} ok; max Δu vs exact "
-            f"{_fmt(worst)} in {compared.loc[at, 'case']}, {verdict} {SAME_SOLUTION_RTOL:g}; {contact})"
+            f"{_fmt(compared.loc[at, 'diff_to_active_set'])} in {compared.loc[at, 'case']}, "
+            f"{_verdict(df, compared, at, specs)}; {contact})"
         )
     return [f"- The other exact columns against active_set: {'; '.join(parts)}."] if parts else []
 
@@ -159,10 +217,15 @@ def _scaling_and_others(df) -> list[str]:
     return lines
 
 
-def atlas_report(df, case_infos: Sequence[Mapping], norms: Sequence[str]) -> str:
-    """``stability.md``: summary numbers, then one line per case."""
-    lines = ["# Numerical stability atlas", "", INTRO, "", "## Summary", "", *_summary(df), *_scaling_and_others(df)]
-    lines += ["", "## Findings per case", ""]
+def atlas_report(
+    df, case_infos: Sequence[Mapping], norms: Sequence[str], specs: Mapping[str, SolverSpec] | None = None
+) -> str:
+    """``stability.md``: notation, summary numbers, the failures explained (``findings``), then one
+    line per case.  ``specs``: the solver columns by label (their limits and tolerances; without
+    them the findings that need them say so)."""
+    lines = ["# Numerical stability atlas", "", INTRO, "", *NOTATION, "## Summary", "", *_summary(df, specs)]
+    lines += [*_scaling_and_others(df), "", *discussion(df, specs)]
+    lines += ["## Findings per case", ""]
     for group in GROUPS:
         infos = [i for i in case_infos if i["case"]["group"] == group]
         if not infos:
@@ -180,9 +243,11 @@ def atlas_stage(
     case_jsons: Sequence[str | os.PathLike],
     case_npzs: Sequence[str | os.PathLike],
     outs: Mapping[str, str | os.PathLike],
+    solver_specs: Mapping[str, Mapping] | None = None,
 ) -> None:
     """Stage ``stability_atlas``: collect the cases into the CSV, report and figure (``outs``:
-    ``csv``, ``md``, ``pdf``, ``png``; ``solvers``: the column order of the grid)."""
+    ``csv``, ``md``, ``pdf``, ``png``; ``solvers``: the column order of the grid; ``solver_specs``:
+    each column's ``SolverSpec`` fields, whose options the report's explanations read)."""
     from signorini.pipeline.artifacts import atomic_write_csv, atomic_write_text, load_json, load_npz
     from signorini.plotting import save
     from signorini.studies.stability.figures import atlas_figure
@@ -192,5 +257,6 @@ def atlas_stage(
     arrays = [load_npz(p) for p in case_npzs]
     df = atlas_table(infos, arrays, norms)
     atomic_write_csv(df, outs["csv"])
-    atomic_write_text(outs["md"], atlas_report(df, infos, norms) + "\n")
+    specs = {label: SolverSpec(**fields) for label, fields in (solver_specs or {}).items()} or None
+    atomic_write_text(outs["md"], atlas_report(df, infos, norms, specs) + "\n")
     save(atlas_figure(df, solvers), outs["pdf"], outs["png"])
