@@ -4,7 +4,6 @@ update changes them)."""
 
 from __future__ import annotations
 
-import inspect
 import subprocess
 import threading
 import time
@@ -57,27 +56,47 @@ def test_the_snakefile_patches_snakemakes_scheduler():
     assert JobScheduler._schedule_reevalutation is patches._schedule_reevaluation_once
 
 
-def test_the_patched_names_have_the_shape_the_patches_expect():
-    """JobScheduler._schedule_reevalutation(self, delay); Workflow.execute calls _prepare_dag and
-    then _build_dag (the check runs between them and the jobs); _build_dag takes no argument;
-    Rule.run_func_src exists; DAG exposes jobs, needrun_jobs and targetjobs; DAGSettings.forcerun."""
-    import snakemake.api  # noqa: F401  (first, as Snakemake itself loads its modules)
-    from snakemake.dag import DAG
-    from snakemake.rules import Rule
-    from snakemake.scheduling.job_scheduler import JobScheduler
-    from snakemake.settings.types import DAGSettings
-    from snakemake.workflow import Workflow
+# Snakemake's internals, inspected in a subprocess: importing snakemake.api loads PuLP, after which
+# OSQP's set-up crashes the interpreter (a clash of their native libraries), and a test of the
+# cvxpy routes may share this worker process
+SHAPE_CHECK = """
+import inspect, json
+import snakemake.api  # first, as Snakemake itself loads its modules
+from snakemake.dag import DAG
+from snakemake.rules import Rule
+from snakemake.scheduling.job_scheduler import JobScheduler
+from snakemake.settings.types import DAGSettings
+from snakemake.workflow import Workflow
 
-    assert list(inspect.signature(JobScheduler._schedule_reevalutation).parameters)[:2] == ["self", "delay"]
-    source = inspect.getsource(Workflow.execute)
-    order = ("self._executor_plugin = executor_plugin", "self._prepare_dag(", "self._build_dag()", "scheduler(")
-    assert [source.index(step) for step in order] == sorted(source.index(step) for step in order)
-    assert "self._executor_plugin = None" in inspect.getsource(Workflow.__post_init__)  # no jobs run: no plugin
-    assert list(inspect.signature(Workflow._build_dag).parameters) == ["self"]
-    assert "run_func_src" in inspect.getsource(Rule)
-    assert all(callable(getattr(DAG, name)) for name in ("needrun_jobs",)) and isinstance(DAG.jobs, property)
-    assert "self.targetjobs" in inspect.getsource(DAG.__init__)
-    assert "forcerun" in DAGSettings.__dataclass_fields__
+source = inspect.getsource(Workflow.execute)
+order = ("self._executor_plugin = executor_plugin", "self._prepare_dag(", "self._build_dag()", "scheduler(")
+print(json.dumps({
+    "reevaluation_parameters": list(inspect.signature(JobScheduler._schedule_reevalutation).parameters)[:2],
+    "execute_in_order": [source.index(step) for step in order] == sorted(source.index(step) for step in order),
+    "no_plugin_without_execute": "self._executor_plugin = None" in inspect.getsource(Workflow.__post_init__),
+    "build_dag_parameters": list(inspect.signature(Workflow._build_dag).parameters),
+    "rule_run_func_src": "run_func_src" in inspect.getsource(Rule),
+    "dag_jobs": callable(DAG.needrun_jobs) and isinstance(DAG.jobs, property),
+    "dag_targetjobs": "self.targetjobs" in inspect.getsource(DAG.__init__),
+    "dag_settings_forcerun": "forcerun" in DAGSettings.__dataclass_fields__,
+}))
+"""
+
+
+def test_the_patched_names_have_the_shape_the_patches_expect():
+    """JobScheduler._schedule_reevalutation(self, delay); Workflow.execute sets the executor plugin,
+    calls _prepare_dag and then _build_dag (the check runs between them and the jobs), and without
+    execute there is no plugin; _build_dag takes no argument; Rule.run_func_src exists; DAG exposes
+    jobs, needrun_jobs and targetjobs; DAGSettings.forcerun."""
+    import json
+    import sys
+
+    proc = subprocess.run([sys.executable, "-c", SHAPE_CHECK], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    shape = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert shape.pop("reevaluation_parameters") == ["self", "delay"]
+    assert shape.pop("build_dag_parameters") == ["self"]
+    assert all(shape.values()), shape
 
 
 def test_a_missing_patched_name_refuses_to_start_in_one_line():

@@ -106,26 +106,45 @@ def test_committed_files_are_the_bytes_of_git_head(tmp_path):
 Entry = tuple[str, str, str, dict[str, str]]
 
 
-def workflow_entries(repo: Path, scenes: tuple[str, ...] = ("paper", "smoke")) -> list[Entry]:
-    """Every output the workflow marks for Snakemake's report, parsed in this process from the
-    Snakefile in ``repo`` (no DAG, no job): the scene page once per scene of ``scenes``."""
-    from snakemake.api import SnakemakeApi
-    from snakemake.settings.enums import Quietness
-    from snakemake.settings.types import OutputSettings, ResourceSettings
+# parsed in a child process: importing snakemake.api loads PuLP, after which OSQP's set-up crashes
+# the interpreter (a clash of their native libraries), and a test of the cvxpy routes may share
+# this worker process
+ENTRIES = """
+import json, sys
+from pathlib import Path
+from snakemake.api import SnakemakeApi
+from snakemake.settings.enums import Quietness
+from snakemake.settings.types import OutputSettings, ResourceSettings
 
-    entries = []
-    with SnakemakeApi(OutputSettings(quiet={Quietness.ALL}, enable_file_logging=False)) as api:
-        workflow = api.workflow(ResourceSettings(), snakefile=repo / "Snakefile", workdir=repo)._workflow
-        for rule in workflow.rules:
-            for out in rule.output:
-                if (flag := out.flags.get("report")) is None:
-                    continue
-                for scene in scenes if "{scene" in str(out) else ("",):
-                    path = REPORT_SCENE_PAGE.format(scene=scene) if scene else str(out)
-                    labels = {k: str(v).replace("{scene}", scene) for k, v in (flag.labels or {}).items()}
-                    entries.append((path, flag.category or "Other", (flag.subcategory or "Other").replace(
-                        "{scene}", scene), labels))
-    return entries
+repo, page = Path(sys.argv[1]), sys.argv[2]
+scenes = sys.argv[3:]
+entries = []
+with SnakemakeApi(OutputSettings(quiet={Quietness.ALL}, enable_file_logging=False)) as api:
+    workflow = api.workflow(ResourceSettings(), snakefile=repo / "Snakefile", workdir=repo)._workflow
+    for rule in workflow.rules:
+        for out in rule.output:
+            if (flag := out.flags.get("report")) is None:
+                continue
+            for scene in scenes if "{scene" in str(out) else ("",):
+                path = page.format(scene=scene) if scene else str(out)
+                labels = {k: str(v).replace("{scene}", scene) for k, v in (flag.labels or {}).items()}
+                sub = (flag.subcategory or "Other").replace("{scene}", scene)
+                entries.append((path, flag.category or "Other", sub, labels))
+print(json.dumps(entries))
+"""
+
+
+def workflow_entries(repo: Path, scenes: tuple[str, ...] = ("paper", "smoke")) -> list[Entry]:
+    """Every output the workflow marks for Snakemake's report, parsed from the Snakefile in
+    ``repo`` (no DAG, no job): the scene page once per scene of ``scenes``."""
+    import json
+    import subprocess
+    import sys
+
+    args = [sys.executable, "-c", ENTRIES, str(repo), REPORT_SCENE_PAGE, *scenes]
+    proc = subprocess.run(args, cwd=repo, capture_output=True, text=True, encoding="utf-8", timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return [tuple(entry) for entry in json.loads(proc.stdout.strip().splitlines()[-1])]
 
 
 def menu_rows(listing: list[Entry]) -> tuple[dict[tuple[str, ...], list[str]], list[str]]:

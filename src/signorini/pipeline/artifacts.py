@@ -173,18 +173,24 @@ def seal_of(path: str | os.PathLike, root: str | os.PathLike = ".") -> dict | No
     return load_json(where) if where.is_file() else None
 
 
-def verify_seal(path: str | os.PathLike, root: str | os.PathLike = ".") -> str | None:
-    """Why ``path`` is not what its job wrote (None when its bytes match its seal): no seal, a
-    damaged seal, or other bytes (edited after it was written)."""
+def seal_broken(path: str | os.PathLike, root: str | os.PathLike = ".") -> str | None:
+    """Why ``path`` is not what its job wrote, if it has a seal: a damaged seal, or other bytes
+    (edited after it was written); None when it has none or its bytes match."""
     try:
         seal = seal_of(path, root)
     except CorruptArtifactError as err:
         return f"its seal is damaged ({err})"
-    if seal is None:
-        return "no record of the job that wrote it"
-    if seal.get("sha256") != file_digest(Path(root) / path):
-        return "its bytes differ from what its job wrote (edited or damaged)"
+    if seal is not None and seal.get("sha256") != file_digest(Path(root) / path):
+        return "its bytes differ from what its job wrote (edited by hand, or damaged)"
     return None
+
+
+def verify_seal(path: str | os.PathLike, root: str | os.PathLike = ".") -> str | None:
+    """Why ``path`` is not vouched for by a seal (None when its bytes match its seal): no seal, or
+    ``seal_broken``."""
+    if not seal_path(path, root).is_file():
+        return "no record of the job that wrote it"
+    return seal_broken(path, root)
 
 
 def _write_seal(path: Path) -> None:

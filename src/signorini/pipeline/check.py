@@ -183,14 +183,14 @@ def not_rendered_here(root: Path, path: str) -> str | None:
     """Why ``path`` (relative to ``root``) was not rendered on this machine from the current cache
     (None when it was): no seal, other bytes than its job wrote, or an input now on disk with other
     content than the job read (another scene, a rebuilt cache) or gone."""
-    from signorini.pipeline.artifacts import CorruptArtifactError, content_digest, seal_of, verify_seal
+    from signorini.pipeline.artifacts import CorruptArtifactError, content_digest, seal_broken, seal_of, seal_path
 
     if not (root / path).is_file():
         return None  # a missing file is reported as missing
-    if reason := verify_seal(path, root):
-        return {"no record of the job that wrote it": "not rendered by a run here (the committed file?)"}.get(
-            reason, reason
-        )
+    if not seal_path(path, root).is_file():
+        return "not rendered by a run here (the committed file?)"
+    if reason := seal_broken(path, root):
+        return reason
     inputs = ((seal_of(path, root) or {}).get("_provenance") or {}).get("inputs") or {}
     for source, recorded in inputs.items():
         try:

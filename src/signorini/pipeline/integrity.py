@@ -37,11 +37,10 @@ from typing import Any
 from signorini.pipeline.artifacts import (
     CorruptArtifactError,
     content_digest,
-    file_digest,
     is_sealed_kind,
     load_json,
     provenance_of,
-    seal_of,
+    seal_broken,
     verify_npz,
 )
 from signorini.pipeline.joblog import plain
@@ -225,8 +224,8 @@ def damage(path: str | os.PathLike, read: bool) -> str | None:
             load_json(path)
         elif path.suffix == ".tsv" and not _benchmark_ok(path):
             return "an incomplete benchmark file"
-        elif is_sealed_kind(path) and (seal := seal_of(path)) and seal.get("sha256") != file_digest(path):
-            return "its bytes differ from what its job wrote (edited by hand, or damaged)"
+        elif is_sealed_kind(path) and (reason := seal_broken(path)):
+            return reason
         elif path.name in ("errors.csv", "eoc.csv") and (reason := table_defect(path)):
             return reason
     except (CorruptArtifactError, OSError, UnicodeDecodeError, csv.Error) as err:

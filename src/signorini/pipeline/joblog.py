@@ -20,7 +20,6 @@ from signorini.pipeline.artifacts import (
     is_sealed_kind,
     provenance_of,
     recording,
-    verify_npz,
     verify_seal,
 )
 
@@ -60,16 +59,15 @@ def environment() -> dict[str, str | None]:
 
 
 def check_inputs(paths: list[str]) -> None:
-    """Vouch for every input before a job reads it: an archive's checksum (streamed, any size), a
-    sealed file's bytes (a table, a Markdown page: ``CorruptArtifactError`` if edited), and that no
-    input was computed from other inputs than the ones now on disk (say a ``system.npz`` replaced
-    under a ``solution.npz`` computed from the old one: ``StaleInputError``)."""
+    """Vouch for every input before a job reads it: a sealed file's bytes (a table, a Markdown page:
+    ``CorruptArtifactError`` if edited), and that no input was computed from other inputs than the
+    ones now on disk (say a ``system.npz`` replaced under a ``solution.npz`` computed from the old
+    one: ``StaleInputError``).  Archives and JSON records verify their own checksum when the stage
+    loads them (``load_npz``, ``load_json``): not read a second time here."""
     for path in paths:
         if not Path(path).is_file():
             continue
-        if Path(path).suffix == ".npz":
-            verify_npz(path)
-        elif is_sealed_kind(path):
+        if is_sealed_kind(path):
             if reason := verify_seal(path):
                 raise CorruptArtifactError(f"{path}: {reason}; rebuild it")
         changed = changed_input(provenance_of(path))
