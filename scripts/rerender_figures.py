@@ -6,7 +6,8 @@ cached artifacts in ``results/`` that a fresh clone does not have.  Their figure
 than the committed tables, so after an edit of a figure's code or of ``plotting.STYLE`` they can be
 redrawn here by the same figure functions the rules call:
 
-- ``theory_extra.{pdf,png}`` from ``theory.csv`` (``theory_table``, written to 7 digits);
+- ``theory_extra.{pdf,png}`` from ``theory.csv`` (``theory_table``, written to 7 digits) and
+  ``contact_set.csv`` (the ends of the discrete contact sets);
 - ``stability.{pdf,png}`` from ``stability.csv`` (``atlas_table``, floats round-trip);
 - ``work_precision.{pdf,png}`` and ``cost_of_accuracy.{pdf,png}`` from ``work_precision.csv``
   (the rule's own input).
@@ -29,10 +30,15 @@ from signorini.plotting import save
 
 
 def theory() -> None:
+    from signorini.studies.theory import contact
     from signorini.studies.theory.figures import extra_figure
 
     outs = FIGURES["theory_report"]
-    save(extra_figure(pd.read_csv(outs["csv"])), outs["extra_pdf"], outs["extra_png"])
+    table = pd.read_csv(FIGURES["contact_set"]["csv"], encoding="utf-8")
+    figure = extra_figure(
+        pd.read_csv(outs["csv"], encoding="utf-8"), contact.ends_frame(table), contact.figure_marks(table)
+    )
+    save(figure, outs["extra_pdf"], outs["extra_png"])
 
 
 def stability() -> None:

@@ -41,11 +41,18 @@ ERRORS = "N,h,L4\n11,0.0909,0.04\n21,0.0476,0.012\n41,0.0244,0.0035\n"
 
 
 def copy_repo(dest: Path) -> Path:
-    """Snakefile, workflow/ and src/ (the rules' code inputs) into ``dest``; mtimes preserved."""
+    """Snakefile, workflow/ and src/ (the rules' code inputs) and the reference data the rules read
+    (``paths.REFERENCES``) into ``dest``; mtimes preserved."""
+    from signorini.pipeline.paths import REFERENCES
+
     shutil.copy2(ROOT / "Snakefile", dest / "Snakefile")
     ignore = shutil.ignore_patterns("__pycache__", "*.egg-info", "*.pyc")
     shutil.copytree(ROOT / "workflow", dest / "workflow", ignore=ignore)
     shutil.copytree(ROOT / "src", dest / "src", ignore=ignore)
+    for path in REFERENCES.values():  # those outside workflow/ (docs/evidence/conventions.csv)
+        (dest / path).parent.mkdir(parents=True, exist_ok=True)
+        if not (dest / path).exists():
+            shutil.copy2(ROOT / path, dest / path)
     return dest
 
 
@@ -249,3 +256,24 @@ def check_kkt_independently(A, b, B, u, lam, tol=1e-10):
     assert u[B].min() >= -tol * np.abs(u).max(), "u_B ≥ 0"
     assert lam.min() >= -tol * scale, "λ ≥ 0"
     assert np.abs(u[B] * lam).max() <= tol * np.abs(u).max() * scale, "complementarity"
+
+
+def contact_table(meshes, right_end: float, single_on=()):
+    """A ``contact_set.csv`` table of the scene's shape: per mesh N one component from the first
+    node right of x0 = 1/2 to the arc length ``right_end`` (on the right edge), with a single node
+    at s = 2.5 on the meshes ``single_on``; and the exact, strict and biactive sets."""
+    import pandas as pd
+
+    from signorini.fem.problem import Problem
+    from signorini.studies.theory.contact import Arc, _rows, exact_sets
+
+    rows = []
+    for N in meshes:
+        start = np.ceil(0.5 * N) / N
+        arcs = [Arc(start, right_end - start, 0), *([Arc(2.5, 0.0, 1)] if N in single_on else [])]
+        rows += _rows("discrete", arcs, N, 1.0 / N, sign_margin=1e6)
+    for name, arcs in exact_sets(Problem()).items():
+        rows += _rows(name, arcs)
+    table = pd.DataFrame(rows)
+    table["N"] = table["N"].astype("Int64")
+    return table

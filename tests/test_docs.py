@@ -210,3 +210,20 @@ def test_the_glossary_check_finds_an_undefined_term(tmp_path):
     page.write_text("The `sw_ne` mesh, columns `*_raw`, the `<norm>_true` norms and `per_mesh` jobs.", encoding="utf-8")
     glossary = "# Glossary\n\n- **`sw_ne`**: the / diagonal.\n- **`_true`**, **`_raw`**: suffixes.\n"
     assert _undefined_terms([page], glossary) == {"per_mesh": ["page.md"]}
+
+
+@pytest.mark.parametrize("caption", sorted((ROOT / "workflow" / "report").glob("*.rst")), ids=lambda p: p.name)
+def test_every_report_caption_is_valid_restructuredtext(caption):
+    """Snakemake renders the captions with docutils: a stray ``|x|`` is a substitution it cannot
+    resolve, and the report prints an error in place of the caption."""
+    import io
+
+    from docutils.core import publish_string
+
+    errors = io.StringIO()
+    publish_string(
+        caption.read_text(encoding="utf-8"),
+        writer_name="html",
+        settings_overrides={"warning_stream": errors, "report_level": 3, "halt_level": 5},
+    )
+    assert not errors.getvalue(), errors.getvalue()

@@ -116,6 +116,27 @@ rule h12_boundary:
         "../scripts/h12_boundary.py"
 
 
+rule load_rule:
+    """Table 1's norms with the load vector integrated by the norms' 16-point rule, as the paper states."""
+    input:
+        systems=expand(rules.discretise.output.npz, scene=FIG, N=scene_of(FIG)["N"]),
+        solutions=expand(rules.solve.output.npz, scene=FIG, N=scene_of(FIG)["N"]),
+        code=code("load_rule"),
+    output:
+        csv=PATHS["load_rule_csv"].format(scene=FIG),
+    log:
+        paths.log("scene", "load_rule", scene=FIG),
+    conda:
+        "../envs/signorini.yaml"
+    params:
+        N=scene_of(FIG)["N"],
+        problem=scene_of(FIG)["problem"],
+        diagonal=scene_of(FIG)["diagonal"],
+        conventions=scene_of(FIG)["conventions"],
+    script:
+        "../scripts/load_rule.py"
+
+
 rule reproduction:
     """Every published cell of Tables 1-2: ours, the paper's, the relative deviation."""
     input:
@@ -123,6 +144,7 @@ rule reproduction:
         table1=rules.table1.output.csv,
         table2=rules.table2.output.csv,
         h12_boundary=rules.h12_boundary.output.csv,
+        load_rule=rules.load_rule.output.csv,
         code=code("reproduction"),
     output:
         **reported(FIGURES["reproduction"], "reproduction", "Paper", "Reproduction"),
@@ -152,6 +174,54 @@ rule runtime:
         jobs=runtime_jobs(FIG),
     script:
         "../scripts/runtime.py"
+
+
+# the findings of the other studies, read from their committed outputs: parameters with their
+# digest (an edited source reruns the summary), not inputs, so that `all` never recomputes a study.
+# A run that renders another study anew may render it after the summary; the digest has changed
+# then, and the next `snakemake all` renders the summary from it.
+from signorini.studies import report as report_lib
+
+# the figures' captions, relative to the working directory as every path of a parameter (an
+# absolute one would change with the checkout's location and rerun the summary in a copy)
+CAPTIONS = os.path.relpath(os.path.join(workflow.basedir, "workflow", "report"))
+SUMMARY_SOURCES = {
+    "table1_true": FIGURES["true_tables"]["table1_csv"],
+    "table2_true": FIGURES["true_tables"]["table2_csv"],
+    "table1_fine": FIGURES["fine_tables"]["table1_csv"],
+    "table2_fine": FIGURES["fine_tables"]["table2_csv"],
+    "theory": FIGURES["theory_report"]["csv"],
+    "theory_rates": FIGURES["theory_report"]["rates_csv"],
+    "contact_set": FIGURES["contact_set"]["csv"],
+    "work_precision": FIGURES["work_precision_table"]["csv"],
+    "stability": FIGURES["stability_atlas"]["csv"],
+}
+
+
+rule summary:
+    """The findings of every study in one page, each with its strength: paper_figures/summary.md."""
+    input:
+        **REFERENCES,
+        table1=rules.table1.output.csv,
+        table2=rules.table2.output.csv,
+        h12_boundary=rules.h12_boundary.output.csv,
+        load_rule=rules.load_rule.output.csv,
+        code=code("summary"),
+    output:
+        **reported(FIGURES["summary"], "summary", "Findings"),
+    log:
+        paths.log("scene", "summary", scene=FIG),
+    localrule: True
+    conda:
+        "../envs/signorini.yaml"
+    params:
+        sources=SUMMARY_SOURCES,
+        captions=CAPTIONS,
+        digest=lambda wc: report_lib.digest(
+            *SUMMARY_SOURCES.values(), *sorted(Path(CAPTIONS).glob("*.rst"))
+        ),
+    script:
+        "../scripts/summary.py"
 
 
 # what `all` builds: every output of the paper's rules, and the rendered scene's tables

@@ -9,6 +9,7 @@ from signorini.studies import report as report_lib
 
 # page: (caption in workflow/report/, category, subcategory), as the rule that writes its source
 REPORT_PAGES = {
+    "summary": ("summary", "Findings", None),
     "table1": ("table1", "Paper", "Tables"),
     "table2": ("table2", "Paper", "Tables"),
     "reproduction": ("reproduction", "Paper", "Reproduction"),
@@ -90,7 +91,7 @@ rule report_contents:
         html=report(
             paths.REPORT_CONTENTS,
             caption="../report/contents.rst",
-            category="Contents",
+            category="Report contents",
             labels=report_lib.page_labels("contents"),
         ),
     log:

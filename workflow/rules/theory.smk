@@ -27,14 +27,37 @@ rule theory_quantities:
         "../scripts/theory_quantities.py"
 
 
+rule contact_set:
+    """The discrete contact sets of the theory scene against the exact one; condition (A_h) per mesh."""
+    input:
+        solutions=lambda wc: expand(
+            rules.solve.output.npz, scene=THEORY, N=scene_of(THEORY)["N"]
+        ),
+        code=code("contact_set"),
+    output:
+        **reported(FIGURES["contact_set"], "contact_set", "Theory", "Contact set"),
+    log:
+        paths.log("scene", "contact_set", scene=THEORY),
+    conda:
+        "../envs/signorini.yaml"
+    params:
+        N=lambda wc: scene_of(THEORY)["N"],
+        problem=lambda wc: scene_of(THEORY)["problem"],
+        diagonal=lambda wc: scene_of(THEORY)["diagonal"],
+    script:
+        "../scripts/contact_set.py"
+
+
 rule theory_report:
-    """The theory scene's findings, per-mesh table and figures (rates against p, supercloseness)."""
+    """The theory scene's findings, per-mesh table, rates data and figures (rates against p,
+    supercloseness, the ends of the contact sets)."""
     input:
         errors=expand(rules.errors.output.csv, scene=THEORY),
         theory=lambda wc: expand(
             rules.theory_quantities.output.json, scene=THEORY, N=scene_of(THEORY)["N"]
         ),
         true_norms=lambda wc: flat(theory_true_norms()),
+        contact_set=rules.contact_set.output.csv,
         code=code("theory_report"),
     output:
         **reported(FIGURES["theory_report"], "theory", "Theory"),
@@ -49,7 +72,7 @@ rule theory_report:
 
 
 rule theory:
-    """The theory scene: paper_figures/theory.{md,csv}, theory_rates.*, theory_extra.*."""
+    """The theory scene: paper_figures/theory.{md,csv}, theory_rates.*, theory_extra.*, contact_set.*."""
     input:
         target_outputs("theory"),
     localrule: True

@@ -24,6 +24,29 @@ rule true_tables:
         "../scripts/true_tables.py"
 
 
+rule free_point_error:
+    """|u - u_h| near the free point (x0, 0) on the rendered scene's coarsest mesh, with the point sets
+    of the conventions' maxima."""
+    input:
+        solution=expand(rules.solve.output.npz, scene=FIG, N=scene_of(FIG)["N"][0]),
+        code=code("free_point_error"),
+    output:
+        **reported(
+            FIGURES["free_point_error"], "free_point_error", "Paper", "True norms"
+        ),
+    log:
+        paths.log("scene", "free_point_error", scene=FIG),
+    conda:
+        "../envs/signorini.yaml"
+    params:
+        N=scene_of(FIG)["N"][0],
+        problem=scene_of(FIG)["problem"],
+        diagonal=scene_of(FIG)["diagonal"],
+        conventions=scene_of(FIG)["conventions"],
+    script:
+        "../scripts/free_point_error.py"
+
+
 rule true_norms:
     """The true norms beside the paper's conventions: paper_figures/table{1,2}_true.{csv,md}."""
     input:
@@ -48,6 +71,23 @@ rule fine_tables:
         norm_jsons=true_table_norms(FINE),
     script:
         "../scripts/fine_tables.py"
+
+
+rule eoc_against_h:
+    """The EOCs of Table 2's seven norms against h, h = 1/101 ... 1/4001, with the expected orders."""
+    input:
+        true_table1=rules.true_tables.output.table1_csv,
+        fine_table1=rules.fine_tables.output.table1_csv,
+        code=code("eoc_against_h"),
+    output:
+        **reported(FIGURES["eoc_against_h"], "eoc_against_h", "Theory", "Finer meshes"),
+    log:
+        paths.log("scene", "eoc_against_h", scene=FINE),
+    localrule: True
+    conda:
+        "../envs/signorini.yaml"
+    script:
+        "../scripts/eoc_against_h.py"
 
 
 rule fine:

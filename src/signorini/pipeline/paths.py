@@ -28,6 +28,8 @@ PATHS = {
     "eoc_csv": "results/{scene}/eoc.csv",
     "fields_npz": "results/{scene}/fields.npz",
     "h12_boundary_csv": "results/{scene}/h12_boundary.csv",
+    # Table 1's norms with the load vector integrated by the norms' 16-point rule instead
+    "load_rule_csv": "results/{scene}/load_rule.csv",
     # the studies beyond the paper
     "theory_json": f"{_MESH}/theory.json",
     "atlas_case_json": "results/{scene}/atlas/{case}.json",
@@ -57,6 +59,8 @@ REFERENCES = {
     "paper_table1": f"{REFERENCE}/paper_table1.csv",
     "paper_table2": f"{REFERENCE}/paper_table2.csv",
     "remarks": f"{REFERENCE}/deviation_remarks.md",
+    # every combination of the conventions against the published Table 1 (benchmarks/conventions.py)
+    "conventions": "docs/evidence/conventions.csv",
 }
 
 
@@ -74,6 +78,7 @@ FIGURES = {
     "runtime": _outputs("runtime", "csv"),
     "theory_report": {
         **_outputs("theory", "md", "csv"),
+        "rates_csv": f"{FIGDIR}/theory_rates.csv",  # the data of theory_rates.png
         **{f"rates_{k}": v for k, v in _outputs("theory_rates", "pdf", "png").items()},
         **{f"extra_{k}": v for k, v in _outputs("theory_extra", "pdf", "png").items()},
     },
@@ -92,6 +97,14 @@ FIGURES = {
         **{f"table1_{k}": v for k, v in _outputs("table1_fine", "csv", "md").items()},
         **{f"table2_{k}": v for k, v in _outputs("table2_fine", "csv", "md").items()},
     },
+    # the discrete contact sets of the theory scene against the exact one, condition (A_h)
+    "contact_set": _outputs("contact_set", "csv", "pdf", "png"),
+    # the EOCs of the seven norms against h, h = 1/101 ... 1/4001, true norms and conventions
+    "eoc_against_h": _outputs("eoc_against_h", "pdf", "png"),
+    # |u - u_h| near the free point (x0, 0) and the conventions' point sets
+    "free_point_error": _outputs("free_point_error", "pdf", "png"),
+    # the findings of every study in one page
+    "summary": _outputs("summary", "md"),
 }
 
 
@@ -115,26 +128,30 @@ class _Open(dict):
 
 # the target rules and the rules whose outputs they render
 TARGETS = {
-    "all": ("table1", "table2", "figure2", "figure3", "reproduction", "runtime"),
-    "theory": ("theory_report",),
+    "all": ("table1", "table2", "figure2", "figure3", "reproduction", "runtime", "summary"),
+    "theory": ("theory_report", "contact_set"),
     "work_precision": ("work_precision_table", "work_precision_figures", "work_precision_report"),
     "stability": ("stability_atlas",),
-    "true_norms": ("true_tables",),
-    "fine": ("fine_tables",),
+    "true_norms": ("true_tables", "free_point_error"),
+    "fine": ("fine_tables", "eoc_against_h"),
 }
 
 
 # what a rendering rule reads from other rendering rules: it is in the report only with them
 RENDER_INPUTS = {
     "reproduction": ("table1", "table2"),
+    "summary": ("table1", "table2", "reproduction"),
     "work_precision_figures": ("work_precision_table",),
     "work_precision_report": ("work_precision_table",),
+    "theory_report": ("contact_set",),
+    "eoc_against_h": ("true_tables", "fine_tables"),
 }
 
 # The report's pages (signorini.studies.report): {page: the Markdown output it shows inline}, each
 # rendered to results/report/<page>.html; and one page per scene with its errors and EOCs.
 REPORT_DIR = "results/report"
 REPORT_PAGES = {
+    "summary": FIGURES["summary"]["md"],
     "table1": FIGURES["table1"]["md"],
     "table2": FIGURES["table2"]["md"],
     "reproduction": FIGURES["reproduction"]["md"],

@@ -33,4 +33,6 @@ def test_figure2_draws_two_surfaces_and_the_fields_are_drawn_rounded():
     assert rounded["f"][1, 2] == float(f"{np.sin(0.75):.5e}") and rounded["n"] is fields["n"]
     fig = figure2(rounded)
     assert len(fig.axes) == 2 and all(ax.name == "3d" for ax in fig.axes)
-    assert [ax.get_title() for ax in fig.axes][0] == "solution $u$"
+    titles = [ax.get_title() for ax in fig.axes]
+    assert titles[0] == "solution $u$"
+    assert "c\\,u$" in titles[1] and "$c$: the reaction coefficient" in titles[1]  # the constant it shows, defined

@@ -40,3 +40,33 @@ def test_the_report_holds_both_tables_the_remarks_and_the_boundary_rules(tmp_pat
     h12 = (tmp_path / "h12.md").read_text(encoding="utf-8")
     assert "## The H^{1/2}(∂Ω) column and the boundary rule" in h12
     assert "The split moves `H^{1/2}` by +10.00 % … +10.00 % (relative)." in h12
+
+
+def test_the_verdicts_and_the_load_rule_follow_the_numbers(tmp_path):
+    """With the conventions and the load-rule table, the page states one verdict per column and per
+    deviation pattern; a perturbed table flips them."""
+    rows = ("1/101", "1/201", "1/301", "1/401", "1/501")
+    devs = (0.0008, 0.0493, 0.0068, 0.0068, 0.0095)
+    (tmp_path / "paper1.csv").write_text("h,L4\n" + "".join(f"{r},1.0\n" for r in rows), encoding="utf-8")
+    (tmp_path / "ours1.csv").write_text(
+        "h,L4\n" + "".join(f"{r},{1 + d}\n" for r, d in zip(rows, devs, strict=True)), encoding="utf-8"
+    )
+    (tmp_path / "t2.csv").write_text("h,L4\ntheo.,2.0\n", encoding="utf-8")
+    (tmp_path / "remarks.md").write_text("Conventions.\n", encoding="utf-8")
+    conventions = "N,diagonal,quadrature,points,w1p_form,h12_form,dev_L4\n" + "".join(
+        f"101,sw_ne,{q},all,components,geometric_full,0.0493\n" for q in ("stroud4_acute1", "dunavant8")
+    )
+    (tmp_path / "conv.csv").write_text(conventions, encoding="utf-8")
+    load = "N,h,norm,default_load,rule_load,relative_change,load_change,kkt_worst,quadrature\n"
+    load += "101,0.0099,L4,1.0,1.0,1.2e-06,2.6e-07,1e-14,stroud4_acute1\n"
+    (tmp_path / "load.csv").write_text(load, encoding="utf-8")
+    args = [tmp_path / n for n in ("ours1.csv", "t2.csv", "paper1.csv", "t2.csv", "remarks.md")]
+    reproduction_stage(*args, tmp_path / "r.md", conventions=tmp_path / "conv.csv", load_rule=tmp_path / "load.csv")
+    text = (tmp_path / "r.md").read_text(encoding="utf-8")
+    assert "## The load vector's quadrature rule" in text and "| 1/101 | +1.2e-06 | 2.6e-07 |" in text
+    assert "**h = 1/201**: stands out" in text and "a steady offset of +0.68 % … +0.95 %" in text
+    assert "explains none of the deviations (*measured*)" in text and "therefore explains" not in text
+    steady = [r + "," + str(1.0 + d) for r, d in zip(rows, (0.0008, 0.0493, -0.0068, 0.0068, 0.0095), strict=True)]
+    (tmp_path / "ours1.csv").write_text("h,L4\n" + "\n".join(steady) + "\n", encoding="utf-8")
+    reproduction_stage(*args, tmp_path / "r.md", conventions=tmp_path / "conv.csv", load_rule=tmp_path / "load.csv")
+    assert "a steady offset of" not in (tmp_path / "r.md").read_text(encoding="utf-8")

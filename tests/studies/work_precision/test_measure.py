@@ -1,10 +1,10 @@
-"""The work-precision study: norms of a P1 function, the measurement function (statuses,
-algebraic error of the exact solver), the findings, and the small study end to end."""
+"""The work-precision study's measurements: norms of a P1 function, the measurement function
+(statuses, algebraic error of the exact solver, the machine it ran on).  The findings, the report
+and the figures have their own test modules."""
 
 from __future__ import annotations
 
 import numpy as np
-import pandas as pd
 import pytest
 from helpers import PROBLEM
 from skfem import MeshTri
@@ -14,15 +14,17 @@ from signorini.fem.norms import p1 as p1norms
 from signorini.fem.norms.conventional import Conventions, evaluate_norms
 from signorini.fem.problem import Problem
 from signorini.fem.quadrature import stroud_conical
+from signorini.pipeline.jobenv import THREAD_VARIABLES
 from signorini.published import PAPER_NORMS
 from signorini.solvers import Certificate, NotConvergedError, SolveResult
 from signorini.studies.scene.discretise import discretise_stage
 from signorini.studies.scene.norm import norm_stage
 from signorini.studies.scene.solve import solve_stage
 from signorini.studies.scene.store import SceneMesh, load_system
-from signorini.studies.work_precision import findings as wpf
 from signorini.studies.work_precision import measure as wp
 from signorini.studies.work_precision.study import study_configs
+
+OMP, OPENBLAS = THREAD_VARIABLES[0], THREAD_VARIABLES[2]  # two of the variables jobenv names
 
 NORMS = list(PAPER_NORMS)
 FAST = {"wait_s": 0.0, "retries": 1, "budget_s": 2.0}  # the protocol without waiting for a quiet machine
@@ -152,7 +154,12 @@ def measure(small_study, config: dict, tolerances=(1e-2,), out="out.json", prev_
 
 
 def test_exact_solver_has_zero_algebraic_error(small_study):
+    import json
+
     (rec,) = measure(small_study, {"solver": "active_set"})
+    machine = json.loads(rec["machine"])  # the machine and software, recorded with every run
+    assert machine["cores"] >= 1 and set(machine["threads"]) >= {OMP, OPENBLAS}
+    assert "Python" in machine["software"] and "numpy" in machine["software"]
     assert rec["status"] == "ok" and rec["tol_label"] == "exact" and rec["kkt_worst"] <= 1e-10
     for n in NORMS:
         assert rec[f"alg_{n}"] == 0.0
@@ -216,190 +223,15 @@ def test_previous_failure_skips_the_run(small_study):
     assert all(r["reason"].startswith("failed at N=12") for r in recs)
 
 
-def test_findings_on_a_synthetic_table():
-    rows = []
-    for N, disc in ((10, 1.0e-3), (20, 2.5e-4), (40, 6.25e-5)):
-        base = {"N": N, "h": 1 / N, "n_dofs": (N + 1) ** 2, "build_s": 0.01 * N, "job_wall_s": 1.0}
-        base.update(job_started=0.0, load1=1.0, reason="")
-        common = {f"disc_{n}": disc for n in ("L4", "W14")}
-        rows.append(
-            {
-                **base,
-                **common,
-                "config": "exact",
-                "label": "AS",
-                "tol_label": "exact",
-                "status": "ok",
-                "time_s": 0.001 * N,
-                "total_L4": disc,
-                "total_W14": disc,
-                "alg_L4": 0.0,
-                "alg_W14": 0.0,
-            }
-        )
-        for tol, rel in (("1e-02", 1e-2), ("1e-06", 1e-7)):
-            rows.append(
-                {
-                    **base,
-                    **common,
-                    "config": "qp",
-                    "label": "QP",
-                    "tol_label": tol,
-                    "status": "ok",
-                    "time_s": 0.002 * N,
-                    "total_L4": disc * (1 + rel),
-                    "total_W14": disc,
-                    "alg_L4": rel * disc,
-                    "alg_W14": 0.0,
-                }
-            )
-    df = pd.DataFrame(rows)
-    found = wpf.findings(df, ["L4", "W14"], paper_l4={10: 1e-3}, paper_l4_eoc={20: 2.0, 40: 2.1})
-    assert found["needed"] == {"qp": "1e-06"}
-    cells = {(c["config"], c["tol_label"]): c for c in found["cells"]}
-    assert cells[("qp", "1e-02")]["changed"] == 3 and cells[("qp", "1e-06")]["changed"] == 0
-    exact_eoc = next(e for e in found["eoc"] if e["tol_label"] == "exact")
-    np.testing.assert_allclose(exact_eoc["eoc"], [2.0, 2.0])
-    assert exact_eoc["max_dev_paper"] == pytest.approx(0.1)
-    assert found["cheapest"][40] == {  # no reference units in this table: ranked by seconds
-        "exact": {"tol_label": "exact", "time_s": 0.04, "rank": 0.04},
-        "qp": {"tol_label": "1e-06", "time_s": 0.08, "rank": 0.08},
-    }
-    assert found["protocol"] == {"measured": False}
-
-
-def _race_row(N: int, config: str, start: str, tol_label: str, time_s: float, time_ref: float, **kw) -> dict:
-    disc = 1e-3 / N
-    return {
-        "N": N,
-        "config": config,
-        "label": config,
-        "start": start,
-        "tol_label": tol_label,
-        "status": "ok",
-        "time_s": time_s,
-        "time_ref": time_ref,
-        "total_L4": disc,
-        "disc_L4": disc,
-        "alg_L4": 0.0,
-        "load1": 1.0,
-        "job_started": 0.0,
-        "job_wall_s": 1.0,
-        "build_s": 0.1,
-        "n_dofs": (N + 1) ** 2,
-        "time_runs": 3,
-        "spread": 0.01,
-        "rejected": 0,
-        "loaded": False,
-        "cpu_share": 1.0,
-        "reason": "",
-        "converged_reason": "",
-        "peer_info": "",
-        "solver": kw.get("solver", "active_set" if tol_label == "exact" else "petsc_tao"),
-    }
-
-
-def test_fair_race_same_warm_start_and_cold_against_cold():
-    """Ours from the cascade against the peers from the cascade start, ours cold against the
-    peers from u = 0; ranked and divided in CPU seconds (the reference units would rank otherwise)."""
-    rows = []
-    for N in (101, 201):
-        rows += [
-            _race_row(N, "ours", "cascade", "exact", 1.0, 2.0),
-            _race_row(N, "ours_cold", "cold", "exact", 4.0, 8.0),
-            # our multigrid route from a cold start: slower than the direct one on the coarse mesh
-            _race_row(N, "mg_cold", "cold", "exact", 5.0 if N == 101 else 1.5, 8.0, solver="multigrid"),
-            _race_row(N, "tron", "cold", "1e-08", 3.0, 12.0),
-            _race_row(N, "tron_ws", "cascade", "1e-08", 2.0, 3.0),
-            _race_row(N, "rsls_ws", "cascade", "1e-08", 2.5, 2.5),  # more seconds, fewer reference units
-        ]
-    found = wpf.findings(pd.DataFrame(rows), ["L4"])
-    warm, cold = found["fair"]["same_warm_start"], found["fair"]["cold_against_cold"]
-    assert [(r["N"], r["ours"], r["other"], r["ratio"]) for r in warm] == [
-        (101, "ours", "tron_ws", 2.0),
-        (201, "ours", "tron_ws", 2.0),
-    ]
-    # per mesh our fastest exact configuration of that start
-    assert [(r["ours"], r["other"], r["ratio"], r["other_s"]) for r in cold] == [
-        ("ours_cold", "tron", 0.75, 3.0),
-        ("mg_cold", "tron", 2.0, 3.0),
-    ]
-    assert found["protocol"]["measured"] and found["protocol"]["repeats_median"] == 3
-    from signorini.studies.work_precision.report import work_precision_md
-
-    md = work_precision_md(pd.DataFrame(rows), found)
-    assert "## Same warm start, and cold against cold" in md and "**Timing protocol**" in md
-    assert "| same warm start: ours | its time |" in md and "| 201 | ours | 1.0 s |" in md
-    assert "| mg_cold | 1.5 s | tron (1e-08) | 3.0 s | ×2.0 |" in md
-
-
-def test_figure_draws_the_fastest_configuration_per_family_with_the_legend_below():
-    """Exact solvers plus one configuration per solver family (the fastest to Table 1's digits on
-    the finest mesh, in CPU seconds), at most eight, Okabe–Ito colours, legends below the axes."""
-    from signorini.studies.work_precision import figures as wpfig
-
-    rows = []
-    for N in (101, 201):
-        rows += [
-            _race_row(N, "ours", "cascade", "exact", 1.0, 2.0),
-            _race_row(N, "ours_cold", "cold", "exact", 4.0, 8.0),
-            _race_row(N, "ours_superlu", "cascade", "exact", 2.0, 4.0),
-            _race_row(N, "ours_mg", "cascade", "exact", 2.0, 4.0, solver="multigrid"),
-        ]
-        for k in range(4):  # four TAO methods: the one with the fewest CPU seconds is drawn
-            rows.append(_race_row(N, f"tao{k}", "cold", "1e-08", 4.0 - k, 9.0 + k))
-        for k in range(4):  # four QP solvers, one family each
-            rows.append(_race_row(N, f"qp{k}", "cold", "1e-08", 1.0, 20.0, solver=f"QP{k}"))
-        rows.append({**_race_row(N, "broken", "cold", "1e-08", 1.0, 1.0, solver="QPX"), "status": "failed"})
-    df = pd.DataFrame(rows)
-    df["W14"] = 0.0
-    for kind in ("alg", "total", "disc"):
-        df[f"{kind}_W14"] = df[f"{kind}_L4"]
-    df["alg_L4"] = df["alg_W14"] = 1e-9
-    series = wpfig.figure_series(df, ["L4"])
-    assert len(series) == wpfig.MAX_SERIES == 8
-    # beyond 8: one exact configuration per route and start (a backend variant goes, another route stays)
-    assert series[:3] == ["ours", "ours_cold", "ours_mg"] and "ours_superlu" not in series
-    assert "tao3" in series and not {"tao0", "tao1", "tao2"} & set(series)
-    assert "broken" not in series  # a family without one ok run
-    fig = wpfig.work_precision_figure(df, [101, 201])
-    colours = {line.get_color() for ax in fig.axes for line in ax.get_lines() if line.get_marker() not in ("", "None")}
-    assert colours <= set(wpfig.OKABE_ITO)
-    fig.canvas.draw()
-    lowest = min(ax.get_window_extent().y0 for ax in fig.axes)
-    assert all(leg.get_window_extent().y1 < lowest for leg in fig.legends)  # no legend over a panel
-
-
-def test_figure_keeps_the_fastest_exact_configuration_of_each_start_when_routes_are_too_many():
-    """Four exact configurations (two routes × two starts) and five solver families: beyond eight
-    series, per start the exact configuration with the fewest CPU seconds on the finest mesh
-    stays (the direct route from the cascade, the multigrid route from the cold start)."""
-    from signorini.studies.work_precision import figures as wpfig
-
-    rows = []
-    for N in (101, 201):
-        rows += [
-            _race_row(N, "ours", "cascade", "exact", 1.0, 2.0),
-            _race_row(N, "ours_mg", "cascade", "exact", 2.0, 4.0, solver="multigrid"),
-            _race_row(N, "ours_cold", "cold", "exact", 4.0 if N == 201 else 1.0, 8.0),
-            _race_row(N, "ours_mg_cold", "cold", "exact", 1.5, 3.0, solver="multigrid"),
-        ]
-        rows += [_race_row(N, f"qp{k}", "cold", "1e-08", 1.0, 20.0, solver=f"QP{k}") for k in range(5)]
-    df = pd.DataFrame(rows)
-    series = wpfig.figure_series(df, ["L4"])
-    assert [c for c in series if not c.startswith("qp")] == ["ours", "ours_mg_cold"]
-    assert len(series) == 7
-
-
-def test_inaccurate_answers_are_grouped_with_their_worst_ratio_from_the_recorded_numbers():
-    import pandas as pd
-
-    from signorini.studies.work_precision.report import _failure_rows
-    from signorini.studies.work_precision.study import INACCURATE
-
-    rows = [
-        {"label": "OSQP", "status": "inaccurate", "reason": INACCURATE, "N": N, "tol_label": "1e-06", "kkt_worst": w}
-        for N, w in ((101, 3e-6), (201, 2.5e-5))
-    ]
-    bad = pd.DataFrame([r | {"kkt_required": 1e-6} for r in rows])
-    assert _failure_rows(bad) == [["OSQP", "inaccurate", "1e-06 at 101, 201", f"{INACCURATE} (up to ×25.0)"]]
+def test_the_machine_record_reads_the_cpu_the_hypervisor_flag_and_the_threads(tmp_path):
+    cpuinfo = tmp_path / "cpuinfo"
+    cpuinfo.write_text("processor\t: 0\nmodel name\t: AMD EPYC\nflags\t\t: fpu sse2 hypervisor\n", encoding="utf-8")
+    product = tmp_path / "product_name"
+    product.write_text("KVM\n", encoding="utf-8")
+    record = wp.machine_record({OMP: "1"}, cpuinfo, product)
+    assert (record["cpu_model"], record["hypervisor"], record["product"]) == ("AMD EPYC", True, "KVM")
+    assert record["threads"][OMP] == "1" and record["threads"][OPENBLAS] == ""
+    cpuinfo.write_text("model name\t: Xeon\nflags\t\t: fpu sse2\n", encoding="utf-8")
+    assert wp.machine_record({}, cpuinfo, tmp_path / "missing")["hypervisor"] is False
+    unknown = wp.machine_record({}, tmp_path / "missing", tmp_path / "missing")
+    assert (unknown["cpu_model"], unknown["hypervisor"], unknown["product"]) == ("", None, "")

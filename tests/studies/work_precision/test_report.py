@@ -1,10 +1,25 @@
-"""``work_precision.md`` (``signorini.studies.work_precision.report``): the setup, which tolerance
-keeps Table 1, the run time to its digits and the failures, from a measurement table."""
+"""``work_precision.md`` (``signorini.studies.work_precision.report``): the setup, the selection
+rule, which tolerance keeps Table 1, the run time to its digits with intervals and the failures,
+from a measurement table; every verdict flips when the data it is computed from are perturbed."""
 
 from __future__ import annotations
 
+import json
+
+import pandas as pd
+
+from signorini.pipeline.jobenv import THREAD_VARIABLES
 from signorini.studies.work_precision.findings import findings
-from signorini.studies.work_precision.report import work_precision_md
+from signorini.studies.work_precision.report import fmt_fit, fmt_ratio, fmt_timed, work_precision_md
+from signorini.studies.work_precision.timing import Protocol
+
+OMP, OPENBLAS = THREAD_VARIABLES[0], THREAD_VARIABLES[2]  # two of the variables jobenv names
+
+NORMS = ["L4", "W14"]
+
+
+def _md(df: pd.DataFrame, protocol: Protocol | None = None, **kw) -> str:
+    return work_precision_md(df, findings(df, NORMS, protocol=protocol, **kw), protocol=protocol)
 
 
 def _table(md: str, heading: str) -> list[list[str]]:
@@ -14,15 +29,148 @@ def _table(md: str, heading: str) -> list[list[str]]:
     return [[cell.strip() for cell in row.strip("|").split("|")] for row in rows[2:]]
 
 
+def _finding(md: str, start: str) -> str:
+    return next(line for line in md.splitlines() if line.startswith(f"- **{start}"))
+
+
 def test_the_report_names_the_tolerance_that_keeps_table_1_and_every_failure(measurements):
-    md = work_precision_md(measurements, findings(measurements, ["L4", "W14"]))
+    md = _md(measurements)
     assert "AS, QP, SCS" in md and "1e-02, 1e-06" in md  # the setup: solvers and tolerances swept
+    assert md.count("A run *keeps Table 1's digits*") == 1  # the selection rule, stated once
     digits = {(r[0], r[1]): r for r in _table(md, "Which tolerance keeps Table 1")}
     assert digits[("QP", "1e-02")][2] == "3/6" and digits[("QP", "1e-06")][2] == "0/6"
+    assert digits[("QP", "1e-06")][5] == "3/3 selected" and digits[("QP", "1e-02")][5] == "0/3"
     assert digits[("AS", "exact")][2] == "0/6" and digits[("SCS", "1e-06")][2] == "0/6 (partial)"
     assert digits[("SCS", "1e-06")][4] == "failed failed failed"
     time_rows = {r[0]: r[1:] for r in _table(md, "Run time to Table 1's digits")}
-    assert time_rows["SCS"] == ["—", "—", "—"] and all(cell.endswith("(1e-06)") for cell in time_rows["QP"])
+    assert time_rows["SCS"] == ["none", "—", "—", "—", "—"]
+    assert time_rows["QP"][:4] == ["1e-06", "0.030 s (0.029–0.031)", "0.060 s (0.059–0.061)", "0.120 s (0.118–0.122)"]
     assert _table(md, "Failures, inaccurate answers and skips") == [
         ["SCS", "failed", "1e-06 at N = 10, 20, 40", "solver status infeasible"]
     ]
+    assert "- **Tolerance needed" in md and "QP 1e-06; none of the swept tolerances: SCS." in md
+
+
+def test_an_inaccurate_run_takes_the_solver_out_of_the_times(measurements):
+    df = measurements.copy()
+    df.loc[(df["config"] == "qp") & (df["tol_label"] == "1e-06") & (df["N"] == 20), "status"] = "inaccurate"
+    md = _md(df)
+    assert "(the selected tolerance): no solver at any swept tolerance." in md
+    assert {r[0]: r[1] for r in _table(md, "Run time to Table 1's digits")}["QP"] == "none"
+    assert "QP (1e-06)" not in _finding(md, "Fastest to Table 1's digits")
+
+
+def _race(run_row, samples_around, warm_other: float, width: float) -> pd.DataFrame:
+    rows = []
+    for N in (101, 201):
+        rows += [
+            run_row(N, "ours", "exact", samples_around(1.0), start="cascade"),
+            run_row(N, "ours_cold", "exact", samples_around(4.0), start="cold"),
+            run_row(N, "tron", "1e-08", samples_around(3.0), solver="petsc_tao"),
+            run_row(
+                N, "tron_ws", "1e-08", samples_around(warm_other, width=width), start="cascade", solver="petsc_tao"
+            ),
+        ]
+    return pd.DataFrame(rows)
+
+
+def test_ties_and_the_fastest_follow_the_intervals(run_row, samples_around):
+    """The peer from the cascade start twice as slow as ours: ours faster; 5 % slower with samples
+    ±10 %: a tie, in the comparison and in the ranking on the finest mesh."""
+    apart = _md(_race(run_row, samples_around, 2.0, 0.02))
+    warm = _finding(apart, "Fastest other solver to Table 1's digits, same warm start")
+    assert "×2.0 (1.9–2.1) against ours" in warm and warm.endswith("Ours faster at N = 101, 201.")
+    assert "ahead of every other selected run" in _finding(apart, "Fastest to Table 1's digits")
+    tied = _md(_race(run_row, samples_around, 1.05, 0.1))
+    warm = _finding(tied, "Fastest other solver to Table 1's digits, same warm start")
+    assert "tie (×0.93–1.2) against ours" in warm and warm.endswith("Tie at N = 101, 201.")
+    assert "tied with it (the ratio's interval contains 1): tron_ws" in _finding(tied, "Fastest to Table 1's digits")
+    fair = _table(tied, "Same warm start, and cold against cold")
+    assert fair[0][:6] == [
+        "101",
+        "ours",
+        "1.0 s (0.980–1.0)",
+        "tron_ws (1e-08)",
+        "1.1 s (0.945–1.2)",
+        "tie (×0.93–1.2)",
+    ]
+    one = _race(run_row, samples_around, 1.05, 0.1)
+    one.loc[one["config"].isin(["ours", "tron_ws"]), "times"] = one["time_s"].astype(str)  # one sample each
+    assert "(undetermined: one sample each)" in _finding(_md(one), "Fastest other solver to Table 1's digits, same")
+
+
+def test_the_eoc_verdict_follows_the_deviations(measurements):
+    """Published EOCs 2.3 and 1.7: the exact ones (2.0, 2.0) deviate by 0.3; once the QP solver's
+    1e-02 run has exactly those EOCs it explains the column."""
+    paper = {20: 2.3, 40: 1.7}
+    far = _md(measurements, paper_l4_eoc=paper)
+    assert "A single fixed QP tolerance of these solvers does not explain the published column." in far
+    df = measurements.copy()
+    loose = (df["config"] == "qp") & (df["tol_label"] == "1e-02")
+    e10 = float(df.loc[loose & (df["N"] == 10), "total_L4"].iloc[0])
+    e20, e40 = e10 / 2**2.3, e10 / 2**2.3 / 2**1.7
+    df.loc[loose & (df["N"] == 20), "total_L4"], df.loc[loose & (df["N"] == 40), "total_L4"] = e20, e40
+    close = _md(df, paper_l4_eoc=paper)
+    assert "QP at 1e-02 reproduces the published irregular EOCs markedly better than the exact solution" in close
+    assert "does not explain the published column" not in close
+
+
+def test_the_cost_of_accuracy_verdict_follows_the_slope(measurements):
+    falling = _finding(_md(measurements), "Cost of accuracy")
+    assert "one more correct digit in L⁴ costs ×3.2" in falling and "does not fall" not in falling
+    df = measurements.copy()
+    exact = df["config"] == "exact"
+    df.loc[exact, "time_s"] = 1.0 / df.loc[exact, "N"]  # the finer the mesh, the faster: errors fall as time grows
+    df.loc[exact, "times"] = df.loc[exact, "time_s"].map(lambda t: f"{t:.6g}")
+    df.loc[exact, "build_s"] = 0.0
+    flat = _finding(_md(df), "Cost of accuracy")
+    assert "in L⁴ the error does not fall measurably with the run time" in flat
+
+
+def test_the_machine_is_named_only_as_recorded(measurements):
+    unrecorded = _finding(_md(measurements), "Machine and software")
+    assert "The committed measurements did not record the machine" in unrecorded and "cores" in unrecorded
+    assert f"The workflow sets `{OMP}`" in unrecorded and "PETSc 3" not in unrecorded
+    record = {
+        "cores": 2,
+        "usable_cores": 2,
+        "cpu_model": "AMD EPYC",
+        "hypervisor": True,
+        "product": "",
+        "threads": {OMP: "1"},
+        "software": {"Python": "3.11.7"},
+    }
+    df = measurements.assign(machine=json.dumps(record), peer_info="PETSc 3.18.5: tron")
+    recorded = _finding(_md(df), "Machine and software")
+    assert recorded.startswith("- **Machine and software.** PETSc 3.18.5 (the PETSc peers' records)")
+    assert "2 cores (2 usable), CPU AMD EPYC, virtualised (the CPU's hypervisor flag)" in recorded
+    assert f"threads {OMP}=1; Python 3.11.7 (12 runs)" in recorded and "did not record" not in recorded
+
+
+def test_the_protocol_line_reports_what_happened(measurements):
+    md = _md(measurements, Protocol(budget_s=0.15, min_repeats=3, max_repeats=7))
+    line = _finding(md, "Timing protocol")
+    assert "of the 12 runs timed under it, 3 stopped on agreement, 3 on the budget, 3 at the cap of 7 samples" in line
+    assert "The 9 runs with an answer have 3–3 samples (median 3); 0 have fewer than 3, 0 a single one." in line
+    assert "over the 9 runs with two or more: median 4%; over the 6 of them under 0.050 s" in line
+
+
+def test_times_ratios_and_exponents_are_printed_with_their_intervals():
+    assert fmt_timed({"value": 1.58, "lo": 1.32, "hi": 1.82, "interval": True, "samples": 5}) == "1.6 s (1.3–1.8)"
+    assert fmt_timed({"value": 12.4, "lo": 0, "hi": 0, "interval": False, "samples": 1}) == "12.4 s (1 sample)"
+    assert fmt_ratio({"value": 0.9, "lo": 0.7, "hi": 1.4, "interval": True, "verdict": "tie"}) == "tie (×0.70–1.4)"
+    assert fmt_ratio({"value": 2.4, "lo": 2.2, "hi": 2.8, "interval": True, "verdict": "above"}) == "×2.4 (2.2–2.8)"
+    assert fmt_fit({"value": -0.95, "lo": -0.97, "hi": -0.93, "interval": True}) == "−0.95 (−0.97 to −0.93)"
+    assert fmt_fit({"value": 1.05, "lo": 1.01, "hi": 1.11, "interval": True}) == "1.05 (1.01–1.11)"
+
+
+def test_inaccurate_answers_are_grouped_with_their_worst_ratio_from_the_recorded_numbers():
+    from signorini.studies.work_precision.report import _failure_rows
+    from signorini.studies.work_precision.study import INACCURATE
+
+    rows = [
+        {"label": "OSQP", "status": "inaccurate", "reason": INACCURATE, "N": N, "tol_label": "1e-06", "kkt_worst": w}
+        for N, w in ((101, 3e-6), (201, 2.5e-5))
+    ]
+    bad = pd.DataFrame([r | {"kkt_required": 1e-6} for r in rows])
+    assert _failure_rows(bad) == [["OSQP", "inaccurate", "1e-06 at 101, 201", f"{INACCURATE} (up to ×25.0)"]]

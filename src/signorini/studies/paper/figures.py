@@ -22,6 +22,9 @@ MARKERS = {"L4": "o", "W14": "s"}
 # far below a pixel, and a last-bit change crosses a rounding boundary of one of the 2 · 161² values
 # with probability ~1e-5 (10 digits: ~0.1, and the PDF writes coordinates to 10 decimals)
 FIELD_DIGITS = 6
+# the right-hand side, with its constant defined: c is the coefficient of the zero-order term of
+# -Δu + c u (fem.problem.Problem.c; the paper's problem (S) has c = 1, its form being the H¹ inner product)
+F_TITLE = "right-hand side $f = -\\Delta u + c\\,u$ ($c$: the reaction coefficient)"
 
 
 @styled
@@ -33,7 +36,7 @@ def figure2(fields: Mapping, fig=None):
     """
     fig = fig if fig is not None else new_figure(figsize=(11.0, 4.6))
     X, Y = fields["x"], fields["y"]
-    for k, (key, title) in enumerate((("u", "solution $u$"), ("f", "right-hand side $f = -\\Delta u + c\\,u$"))):
+    for k, (key, title) in enumerate((("u", "solution $u$"), ("f", F_TITLE))):
         ax = fig.add_subplot(1, 2, k + 1, projection="3d")
         ax.plot_surface(
             X, Y, fields[key], cmap="viridis", rstride=2, cstride=2, linewidth=0.1, edgecolor="k", antialiased=True

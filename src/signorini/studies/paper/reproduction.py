@@ -10,7 +10,9 @@ from pathlib import Path
 from signorini.formatting import md_table
 from signorini.pipeline.artifacts import atomic_write_text
 from signorini.published import label_md
+from signorini.studies.paper.deviations import STEADY_ROWS, table1_verdicts
 from signorini.studies.paper.reference import read_table_csv, relative_deviation
+from signorini.studies.verdict import Verdict
 
 HEADER = ["h", "norm", "ours", "paper", "rel. deviation"]
 TEMPLATE = """\
@@ -32,10 +34,11 @@ Largest |relative deviation| per norm (EOC and regr. rows): {worst2}.
 The "theo." row holds the expected orders (minus ε), the same constants on both sides.
 
 {table2}
-{h12_boundary}## Remarks on deviations
+{h12_boundary}{load_rule}## The conventions
 
 {remarks}
-"""
+
+{verdicts}"""
 
 
 def cells(ours: Mapping, paper: Mapping, fmt: Callable[[float], str]) -> tuple[list[list[str]], dict[str, float]]:
@@ -99,6 +102,60 @@ def h12_section(h12_csv: str | os.PathLike, paper: Mapping) -> str:
     )
 
 
+VERDICTS = """\
+## What reproduces and what does not
+
+Each statement is chosen by a condition on the numbers above (`signorini.studies.paper.deviations`)
+and says how strong it is: *by construction* (true because of how the comparison was set up),
+*measured* (a computed condition on these data) or *open* (measured, its cause not known). A rule
+is *fitted* to a column when it was chosen because it matches that column; the candidate rules
+are those of `{conventions}` (the other options at the chosen conventions). A *steady offset* is a
+deviation of one sign on the {steady} finest meshes whose spread is below half its mean.
+
+{lines}
+
+Whether an inexactly solved QP could produce the open deviations is weighed against the
+work-precision study's runs in `paper_figures/summary.md`.
+"""
+
+
+def verdicts_section(verdicts: list[tuple[str, Verdict]], conventions: str | os.PathLike) -> str:
+    """The verdicts on Table 1's deviations as a list, one per norm or topic."""
+    lines = "\n".join(
+        f"- **{label_md(topic) if topic in ('L4', 'Linf', 'W14', 'W1inf', 'H12') else topic}**: {v.line()}."
+        for topic, v in verdicts
+    )
+    return VERDICTS.format(conventions=conventions, steady=STEADY_ROWS, lines=lines)
+
+
+LOAD_RULE = """\
+## The load vector's quadrature rule
+
+The paper integrates the right-hand side of (S_h) with the same 16-point rule as the norms; the
+workflow assembles `b = ∫ f φ_i` with scikit-fem's 16-point degree-8 rule. Both solutions below are
+certified; the table gives the relative change of each Table 1 cell when `b` is integrated by the
+norms' rule (`{conventions_rule}`) and the largest change of `b` relative to `max |b|`.
+Source: `{source}`.
+
+{table}
+"""
+
+
+def load_rule_section(load_rule_csv: str | os.PathLike) -> str:
+    """Table 1's cells under both load rules: the relative change per mesh and norm."""
+    import pandas as pd
+
+    frame = pd.read_csv(load_rule_csv, encoding="utf-8")
+    norms = list(dict.fromkeys(frame["norm"]))
+    rows = []
+    for N, group in frame.groupby("N", sort=True):
+        change = dict(zip(group["norm"], group["relative_change"], strict=True))
+        rows.append([f"1/{int(N)}", *(f"{change[n]:+.1e}" for n in norms), f"{group['load_change'].iloc[0]:.1e}"])
+    header = ["h", *(label_md(n) for n in norms), "change of b"]
+    rule = frame["quadrature"].iloc[0]
+    return LOAD_RULE.format(conventions_rule=rule, source=load_rule_csv, table=md_table(header, rows))
+
+
 def reproduction_stage(
     ours_table1: str | os.PathLike,
     ours_table2: str | os.PathLike,
@@ -107,10 +164,14 @@ def reproduction_stage(
     remarks: str | os.PathLike,
     out_md: str | os.PathLike,
     h12_boundary: str | os.PathLike | None = None,
+    conventions: str | os.PathLike | None = None,
+    load_rule: str | os.PathLike | None = None,
 ) -> None:
     """``reproduction.md``: every cell of the published Tables 1 and 2 as ours | paper | relative deviation;
     with ``h12_boundary`` (``results/<scene>/h12_boundary.csv``) also the ``H^{1/2}`` column under
-    the whole-edge and the split boundary rule."""
+    the whole-edge and the split boundary rule; with ``conventions`` (every convention against the
+    published Table 1) the verdicts on the deviations (``studies.paper.deviations``), with
+    ``load_rule`` (``studies.paper.load_rule``) also what the load vector's rule changes."""
     rows1, worst1 = cells(read_table_csv(ours_table1), read_table_csv(paper_table1), lambda v: f"{v:.4e}")
     rows2, worst2 = cells(read_table_csv(ours_table2), read_table_csv(paper_table2), lambda v: f"{v:.4f}")
     text = TEMPLATE.format(
@@ -121,6 +182,15 @@ def reproduction_stage(
         table1=md_table(HEADER, rows1),
         table2=md_table(HEADER, rows2),
         h12_boundary=h12_section(h12_boundary, read_table_csv(paper_table1)) if h12_boundary else "",
+        load_rule=load_rule_section(load_rule) if load_rule else "",
         remarks=Path(remarks).read_text(encoding="utf-8").strip(),
+        verdicts=verdicts_section(
+            table1_verdicts(
+                read_table_csv(ours_table1), read_table_csv(paper_table1), conventions, load_rule, h12_boundary
+            ),
+            conventions,
+        )
+        if conventions
+        else "",
     )
     atomic_write_text(out_md, text)

@@ -3,6 +3,7 @@ the stage ``work_precision_figures`` saves them."""
 
 from __future__ import annotations
 
+import itertools
 import os
 from collections.abc import Sequence
 
@@ -25,6 +26,12 @@ def _marker(label: str) -> str:
 OKABE_ITO = ["#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#000000", "#8C8C8C"]
 MAX_SERIES = len(OKABE_ITO)
 FAMILIES = {"petsc_snes": "PETSc SNES VI", "petsc_tao": "PETSc TAO"}
+TIME_LABEL = "solve time [CPU s]"
+# the time panel's series beyond the figure's palette (exact configurations the work-precision figure
+# leaves out): Paul Tol's wine, teal, olive and indigo, none of them an Okabe–Ito colour
+EXTRA_COLORS = ["#882255", "#44AA99", "#999933", "#332288"]
+MARKERS = ("o", "^", "D", "v", "P", "X", "<", ">", "p", "h", "d", "*")  # one per series ("s": the assembly)
+ASSEMBLY = {"color": "0.3", "marker": "s"}
 
 
 def family(solver: str) -> str:
@@ -33,21 +40,23 @@ def family(solver: str) -> str:
 
 
 def figure_series(df, table1_norms: Sequence[str] | None = None) -> list[str]:
-    """The configurations drawn: every exact one, and per other solver family the fastest
-    configuration (CPU seconds) to Table 1's digits on the finest mesh (none keeps them: the
-    family's fastest run of status ok there; its first configuration otherwise).  A family none
-    of whose runs is ``ok`` is left out: its failures are in the report.  Beyond ``MAX_SERIES``
-    (the palette), only the first exact configuration of each route and start stays (a backend
-    variant goes, another route such as multigrid stays), and if that is still too many, the
-    fastest exact configuration of each start on the finest mesh; their runs are in the CSV and
+    """The configurations drawn: every exact one, and per other solver family the configuration
+    whose selected run on the finest mesh (``selection``) is the fastest (none has a selected
+    tolerance: the family's fastest run of status ok there; its first configuration otherwise).
+    A family none of whose runs is ``ok`` is left out: its failures are in the report.  Beyond
+    ``MAX_SERIES`` (the palette), only the first exact configuration of each route and start stays
+    (a backend variant goes, another route such as multigrid stays), and if that is still too many,
+    the fastest exact configuration of each start on the finest mesh; their runs are in the CSV and
     the report."""
     from signorini.published import TABLE1_NORMS
-    from signorini.studies.work_precision.findings import RANK_KEY, fastest_to_digits
+    from signorini.studies.work_precision.findings import starts
+    from signorini.studies.work_precision.selection import selected_runs
 
     exact = list(dict.fromkeys(df.loc[df["tol_label"] == "exact", "config"]))
     finest = int(df["N"].max())
     norms = [n for n in (table1_norms or TABLE1_NORMS) if f"total_{n}" in df.columns]
-    keeps = fastest_to_digits(df, finest, norms)
+    selected = selected_runs(df, norms)
+    keeps = selected[selected["N"] == finest].set_index("config")["time_s"].to_dict()
     last = df[(df["N"] == finest) & (df["status"] == "ok")]
     chosen = list(exact)
     others = df[~df["config"].isin(exact)]
@@ -55,17 +64,15 @@ def figure_series(df, table1_norms: Sequence[str] | None = None) -> list[str]:
         members = list(dict.fromkeys(others.loc[others["solver"].astype(str).map(family) == fam, "config"]))
         if not (others.loc[others["config"].isin(members), "status"] == "ok").any():
             continue  # nothing but failures and skips: in the report, not on the axes
-        candidates = {c: v["rank"] for c, v in keeps.items() if c in members}
+        candidates = {c: keeps[c] for c in members if c in keeps}
         if not candidates:
             ok = last[last["config"].isin(members)]
-            candidates = ok.groupby("config")[RANK_KEY].min().to_dict() if not ok.empty else {members[0]: 0.0}
+            candidates = ok.groupby("config")["time_s"].min().to_dict() if not ok.empty else {members[0]: 0.0}
         chosen.append(min(candidates, key=candidates.get))
     if len(chosen) > MAX_SERIES:
-        from signorini.studies.work_precision.findings import starts
-
         start = dict(zip(df["config"], starts(df), strict=True))
         solver = dict(zip(df["config"], df["solver"].astype(str), strict=True))
-        seconds = df[df["N"] == finest].groupby("config")[RANK_KEY].min()
+        seconds = df[df["N"] == finest].groupby("config")["time_s"].min()
         fastest_first = sorted(exact, key=lambda c: seconds.get(c, float("inf")))
         # by route and start (the first configuration: the default backend), then by start (the fastest)
         for group, order in ((lambda c: (solver[c], start[c]), exact), (lambda c: start[c], fastest_first)):
@@ -205,7 +212,7 @@ def work_precision_figure(df, figure_N: Sequence[int] = (), fig=None, configs: S
             if i == 0:
                 ax.set_title(f"$h = 1/{N}$")
             if i == len(FIGURE_NORMS) - 1:
-                ax.set_xlabel(_time_label(df))
+                ax.set_xlabel(TIME_LABEL)
             if j == 0:
                 ax.set_ylabel(f"algebraic error in {label_tex(norm, domain=False)}")
     solvers, keys = _legend_handles(shown, configs, colors, order)
@@ -228,39 +235,35 @@ def work_precision_figure(df, figure_N: Sequence[int] = (), fig=None, configs: S
     return fig
 
 
-def _time_label(df) -> str:
-    from signorini.studies.work_precision.findings import measured_under_protocol
-
-    return "solve time [CPU s]" if measured_under_protocol(df) else "solve time [s]"
-
-
 def _exact_runs(df):
-    """The first exact configuration's rows (the pipeline's solver), sorted by N, and all exact rows."""
+    """The first exact configuration's rows (the pipeline's solver), sorted by N."""
     exact = df[df["tol_label"] == "exact"]
-    first = exact["config"].iloc[0]
-    return exact[exact["config"] == first].sort_values("N"), exact
+    return exact[exact["config"] == exact["config"].iloc[0]].sort_values("N")
 
 
 @styled
 def cost_panel(df, ax=None):
     """Total error ``‖u − u_h‖`` of the exact solver in every norm of the paper against total run
-    time (assembly + solve) over the mesh sequence, log-log, with the fitted slope per norm."""
+    time (assembly + solve) over the mesh sequence, log-log, with the fitted slope per norm (one
+    colour and marker per norm)."""
     ax = ax if ax is not None else new_figure(figsize=(5.5, 4.6)).subplots()
-    ex, _ = _exact_runs(df)
+    ex = _exact_runs(df)
     total = (ex["build_s"] + ex["time_s"]).to_numpy(dtype=float)
     norms = [n for n in PAPER_NORMS if f"total_{n}" in ex.columns]
-    for norm in norms:
+    for k, norm in enumerate(norms):
         e = ex[f"total_{norm}"].to_numpy(dtype=float)
         slope = np.polyfit(np.log(total), np.log(e), 1)[0] if len(e) > 1 else float("nan")
-        ax.loglog(total, e, marker="o", markersize=4, label=f"{label_tex(norm, domain=False)} (slope {slope:.2f})")
+        label = f"{label_tex(norm, domain=False)} (slope {slope:.2f})"
+        ax.loglog(total, e, marker=MARKERS[k % len(MARKERS)], markersize=4, label=label)
     e_all = ex[[f"total_{n}" for n in norms]]
     # each mesh's h above its largest error, horizontal; the limits leave room for these labels
     # (top), the legend (bottom) and the first and last label (left and right)
     # (every other one higher: neighbouring run times can be close)
     tops = e_all.max(axis=1).to_numpy(dtype=float)
     for k, (t, e, N) in enumerate(zip(total, tops, ex["N"], strict=True)):
-        ax.annotate(f"1/{N}", (t, e), textcoords="offset points", xytext=(0, 6 + 10 * (k % 2)), ha="center",
-                    fontsize="x-small")
+        ax.annotate(
+            f"1/{N}", (t, e), textcoords="offset points", xytext=(0, 6 + 10 * (k % 2)), ha="center", fontsize="x-small"
+        )
     ax.text(0.02, 0.98, "labels: mesh width $h$", transform=ax.transAxes, ha="left", va="top", fontsize="x-small")
     values = e_all.to_numpy(dtype=float)
     ax.set_ylim(np.nanmin(values) / 300.0, np.nanmax(values) * 8.0)
@@ -273,56 +276,77 @@ def cost_panel(df, ax=None):
     return ax
 
 
-def _peer_lines(df, ax, colors: dict) -> None:
-    """The drawn PETSc peers' (``figure_series``) time to Table 1's digits against the unknowns
-    (dashed), with their exponents."""
+def time_series(df, table1_norms: Sequence[str] | None = None) -> dict[str, dict]:
+    """The solve-time series of ``time_panel``: the selected runs (``selection``) of every exact
+    configuration and of the PETSc peers ``figure_series`` draws, each with its times, their
+    intervals, its exponent ``p`` (time ∝ unknowns^p), and a colour and marker of its own (the
+    colours of ``work_precision_figure``; ``EXTRA_COLORS`` for the rest)."""
     from signorini.published import TABLE1_NORMS
-    from signorini.studies.work_precision.findings import peer_comparison
+    from signorini.studies.work_precision import uncertainty as unc
+    from signorini.studies.work_precision.findings import is_peer
+    from signorini.studies.work_precision.selection import selected_runs
 
-    n_dofs = df.drop_duplicates("N").set_index("N")["n_dofs"]
-    for config, v in (peer_comparison(df, TABLE1_NORMS).get("scaling") or {}).items():
-        if not v["N"] or config not in colors:
-            continue
-        p = f" ($p$ = {v['exponent']:.2f})" if np.isfinite(v["exponent"]) else ""
-        x = [float(n_dofs[N]) for N in v["N"]]
-        ax.loglog(x, v["time_s"], marker=".", linestyle="--", color=colors[config], label=f"{v['label']}{p}")
+    norms = [n for n in (table1_norms or TABLE1_NORMS) if f"total_{n}" in df.columns]
+    drawn = figure_series(df, norms)
+    palette = _config_colors(df, drawn)
+    extra = itertools.cycle(EXTRA_COLORS)
+    sel = selected_runs(df, norms)
+    exact = list(dict.fromkeys(sel.loc[sel["tol_label"] == "exact", "config"]))
+    peers = [c for c in dict.fromkeys(sel.loc[is_peer(sel), "config"]) if c in drawn]
+    series = {}
+    for k, config in enumerate(exact + peers):
+        rows = sel[sel["config"] == config].sort_values("N")
+        times = [unc.run_time(r) for _, r in rows.iterrows()]
+        bounds = np.array([t.interval or (t.value, t.value) for t in times])
+        series[config] = {
+            "label": str(rows["label"].iloc[0]),
+            "peer": config in peers,
+            "n_dofs": rows["n_dofs"].to_numpy(dtype=float),
+            "time_s": np.array([t.value for t in times]),
+            "lo": bounds[:, 0],
+            "hi": bounds[:, 1],
+            "p": unc.exponent(list(rows["n_dofs"].astype(float)), times).value,
+            "color": palette.get(config) or next(extra),
+            "marker": MARKERS[k % len(MARKERS)],
+        }
+    return series
 
 
 @styled
 def time_panel(df, ax=None):
-    """Where the time goes: assembly and the exact solver configurations against the unknowns;
-    dashed: the drawn PETSc peers' time to Table 1's digits (``findings.peer_comparison``), in
-    the colours of ``work_precision_figure``; the legend below the axes."""
+    """Where the time goes: assembly and the selected runs of the exact configurations against the
+    unknowns; dashed: the drawn PETSc peers' selected runs, with their exponents (``time_series``);
+    bars: the times' intervals (``uncertainty``); the legend below the axes."""
     ax = ax if ax is not None else new_figure(figsize=(5.5, 6.0)).subplots()
-    ex, exact = _exact_runs(df)
-    colors = _config_colors(df, figure_series(df))
+    ex = _exact_runs(df)
     n = ex["n_dofs"].to_numpy(dtype=float)
-    ax.loglog(n, ex["build_s"], marker="s", color="0.3", label="assembly (mesh, A, b)")
-    for config in dict.fromkeys(exact["config"]):
-        sub = exact[exact["config"] == config].sort_values("N")
-        ax.loglog(
-            sub["n_dofs"],
-            sub["time_s"],
-            marker="o",
-            color=colors.get(config, "0.6"),
-            label=f"solve: {sub['label'].iloc[0]}",
+    handles = ax.loglog(n, ex["build_s"], **ASSEMBLY, label="assembly (mesh, A, b)")
+    for v in time_series(df).values():
+        label = f"{v['label']} ($p$ = {v['p']:.2f})" if v["peer"] else f"solve: {v['label']}"
+        bars = ax.errorbar(
+            v["n_dofs"],
+            v["time_s"],
+            yerr=[v["time_s"] - v["lo"], v["hi"] - v["time_s"]],
+            color=v["color"],
+            marker=v["marker"],
+            markersize=4 if v["peer"] else 5,
+            linestyle="--" if v["peer"] else "-",
+            capsize=2,
+            label=label,
         )
-    _peer_lines(df, ax, colors)
-    ax.loglog(n, float(ex["build_s"].iloc[0]) * n / n[0], linestyle=":", color="0.6", label=r"$\propto$ unknowns")
+        handles.append(bars)
+    handles += ax.loglog(
+        n, float(ex["build_s"].iloc[0]) * n / n[0], linestyle=":", color="0.6", label=r"$\propto$ unknowns"
+    )
     ax.set_xlabel("unknowns $(N+1)^2$")
-    ax.set_ylabel(_time_label(df).replace("solve time", "time"))
+    ax.set_ylabel(TIME_LABEL.replace("solve time", "time"))
     ax.set_title("Where the time goes")
     ax.grid(True, which="major", linewidth=0.3, alpha=0.6)
     # below the axes: inside, the many lines of the peers leave no free corner
-    ax.legend(fontsize="x-small", loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False)
+    ax.legend(
+        handles=handles, fontsize="x-small", loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, frameon=False
+    )
     return ax
-
-
-def is_peer_table(df) -> bool:
-    """Whether the table holds PETSc peer runs."""
-    from signorini.studies.work_precision.findings import is_peer
-
-    return bool(is_peer(df).any())
 
 
 @styled

@@ -1,31 +1,39 @@
 """Findings of the work-precision study: what ``work_precision.md`` states, in numbers.
 
 Computed from the measurement table (``work_precision.csv``): how many Table 1 cells each
-(solver, tolerance) changes in their printed 5 significant digits, the tolerance each solver
-needs so that none changes, the fastest run per mesh that keeps them, the ``L⁴`` EOCs of the
-inexact solutions against the published Table 2 column, the published ``L⁴`` cells each run
-comes closest to, and the exact solver's cost per digit.  ``report`` renders them.
+(solver, tolerance) changes in their printed 5 significant digits, each configuration's selected
+tolerance and selected runs (``selection``: the one rule behind every time, ratio, ranking and
+exponent), the fastest selected run and the comparisons from the same start with their intervals
+(``uncertainty``), the exponents of time against unknowns, the ``L⁴`` EOCs of the inexact solutions
+against the published Table 2 column, the published ``L⁴`` cells each run comes closest to, the
+exact solver's cost per digit, what the timing protocol did, and what the table records of the
+machine and the software.  ``report`` renders them.
+
+Times are ranked and divided in CPU seconds (``time_s``), not in the reference units
+(``time_ref``): on this machine the reference kernel's time varies from sample to sample about as
+much as a call's, even within one round-robin, so dividing by it adds that noise; beside busy
+processes it kept the ratios no better than CPU times did (``docs/evidence/timing_robustness*.json``).
 """
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from signorini.formatting import sci_md
+from signorini.studies.work_precision import uncertainty as unc
+from signorini.studies.work_precision.selection import digits_unchanged, keeps_digits, printed, selected_tolerances
 from signorini.studies.work_precision.study import EXACT_LABEL
 from signorini.studies.work_precision.table import tolerance_order
+from signorini.studies.work_precision.timing import Protocol
 
 if TYPE_CHECKING:
     import pandas as pd
 
-
-def printed(x: float) -> str:
-    """A cell of Table 1 as printed (5 significant digits, ``formatting.sci_md``)."""
-    return sci_md(x) if np.isfinite(x) else "—"
+STOPS = ("spread", "budget", "max_repeats", "answer rejected")  # ``time_stop``: why a run's sampling ended
 
 
 def _runs(df: pd.DataFrame, config: str, label: str) -> pd.DataFrame:
@@ -33,25 +41,26 @@ def _runs(df: pd.DataFrame, config: str, label: str) -> pd.DataFrame:
     return df[(df["config"] == config) & (df["tol_label"] == label)].set_index("N")
 
 
-def _unchanged(row: pd.Series, norms: Sequence[str]) -> bool | None:
-    """Whether the run's total errors print like the exact ones in every Table 1 column
-    (None: the run has no answer)."""
-    if not norms or not np.isfinite(float(row[f"total_{norms[0]}"])):
-        return None
-    return all(printed(float(row[f"total_{n}"])) == printed(float(row[f"disc_{n}"])) for n in norms)
+def _time(row: Mapping | None) -> dict:
+    """A run's time with its interval (``uncertainty``) and its number of samples; NaN without a run."""
+    if row is None or not math.isfinite(float(row["time_s"])):
+        return {"value": math.nan, "lo": math.nan, "hi": math.nan, "interval": False, "samples": 0}
+    return {**unc.run_time(row).summary(), "samples": int(unc.samples(row.get("times")).size)}
 
 
-def _cell_changes(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> list[dict]:
-    """Per (config, tolerance): Table 1 cells printed differently, worst relative change, statuses."""
+def _cell_changes(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str], chosen: Mapping) -> list[dict]:
+    """Per (config, tolerance): Table 1 cells printed differently, worst relative change, statuses,
+    the meshes on which the run keeps Table 1's digits, whether it is the selected tolerance."""
     cells = []
     for config, label in tolerance_order(df):
         sub = _runs(df, config, label)
-        changed, worst, answered = 0, 0.0, True
+        changed, worst, answered, keeping = 0, 0.0, True, 0
         for N in Ns:
             row = sub.loc[N] if N in sub.index else None
-            if row is None or _unchanged(row, t1) is None:
+            if row is None or digits_unchanged(row, t1) is None:
                 answered = False
                 continue
+            keeping += keeps_digits(row, t1)
             for n in t1:
                 ours, ref = float(row[f"total_{n}"]), float(row[f"disc_{n}"])
                 changed += printed(ours) != printed(ref)
@@ -67,8 +76,10 @@ def _cell_changes(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> lis
                 "changed": changed,
                 "n_cells": len(t1) * len(Ns),
                 "worst_rel_change": worst,
+                "keeping": keeping,
+                "selected": chosen.get(config) == label,
                 "statuses": [str(sub.loc[N, "status"]) if N in sub.index else "—" for N in Ns],
-                "time_last": float(last["time_s"]) if last is not None else math.nan,
+                "time_last": _time(None if last is None else {**last.to_dict(), "N": Ns[-1]}),
                 "alg_L4_rel_last": (
                     float(last["alg_L4"] / last["disc_L4"]) if last is not None and "alg_L4" in sub else math.nan
                 ),
@@ -77,71 +88,99 @@ def _cell_changes(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> lis
     return cells
 
 
-def _needed(cells: Sequence[Mapping]) -> dict[str, str | None]:
-    """Per QP config, the loosest swept tolerance from which every tighter one keeps Table 1."""
-    needed: dict[str, str | None] = {}
-    for config in dict.fromkeys(c["config"] for c in cells if not c["exact"]):
-        sweep = [c for c in cells if c["config"] == config and c["tol_label"] != "default"]
-        sweep.sort(key=lambda c: float(c["tol_label"]))  # tight to loose
-        best = None
-        for c in sweep:
-            if not (c["answered"] and c["changed"] == 0):
-                break
-            best = c["tol_label"]
-        needed[config] = best
-    return needed
+class Selected:
+    """The selected runs (``selection``) with their times' bootstrap (``uncertainty.run_time``):
+    ``tolerance`` per configuration, ``est[(config, N)]``, ``row[(config, N)]``."""
+
+    def __init__(self, df: pd.DataFrame, t1: Sequence[str]):
+        self.tolerance = selected_tolerances(df, t1)
+        self.est: dict[tuple[str, int], unc.Estimate] = {}
+        self.row: dict[tuple[str, int], Mapping] = {}
+        for _, r in df.iterrows():
+            if self.tolerance.get(r["config"]) == r["tol_label"]:
+                key = (str(r["config"]), int(r["N"]))
+                self.est[key], self.row[key] = unc.run_time(r), r
+
+    def at(self, N: int, configs: Sequence[str] | None = None) -> dict[str, unc.Estimate]:
+        """Config → time estimate of the selected runs at ``N`` (of ``configs``, default all)."""
+        return {c: e for (c, n), e in self.est.items() if n == N and (configs is None or c in configs)}
+
+    def entry(self, config: str, N: int) -> dict:
+        """The selected run's tolerance and time (with interval and samples)."""
+        samples = int(unc.samples(self.row[(config, N)].get("times")).size)
+        return {
+            "config": config,
+            "tol_label": self.tolerance[config],
+            **self.est[(config, N)].summary(),
+            "samples": samples,
+        }
 
 
-# The column that ranks run times and forms their ratios: ``time_s``, CPU seconds under the timing
-# protocol (wall seconds in tables measured before it).  Not the reference units ``time_ref``: on
-# this machine the reference kernel's time varies from sample to sample about as much as a call's,
-# even within one round-robin, so dividing by it adds that noise; beside busy processes it kept the
-# ratios no better than CPU times did (``docs/evidence/timing_robustness*.json``).
-RANK_KEY = "time_s"
+def _ratio(num: unc.Estimate, den: unc.Estimate) -> dict:
+    r = unc.ratio(num, den)
+    return {**r.summary(), "verdict": unc.verdict(r)}
 
 
-def measured_under_protocol(df: pd.DataFrame) -> bool:
-    """Whether the table was measured under the timing protocol (it has reference units)."""
-    return "time_ref" in df.columns and bool(np.isfinite(df["time_ref"].to_numpy(dtype=float)).any())
+def _fastest(sel: Selected, N: int) -> list[dict]:
+    """The selected runs at ``N`` by median time, each with its ratio to the fastest."""
+    at = sel.at(N)
+    ranked = sorted(at, key=lambda c: at[c].value)
+    return [
+        {**sel.entry(c, N), "vs_fastest": _ratio(at[c], at[ranked[0]]) if k else None} for k, c in enumerate(ranked)
+    ]
 
 
 def starts(df: pd.DataFrame) -> pd.Series:
-    """Each row's start (``cascade`` or ``cold``); tables without the ``start`` column: the
-    exact solver's cold configurations by their label, every other run cold."""
-    import pandas as pd
+    """Each row's start: ``cascade`` (the cascade's interpolated coarse solution) or ``cold``."""
+    return df["start"].astype(str)
 
-    if "start" in df.columns and df["start"].notna().all():
-        return df["start"].astype(str)
+
+def _fair_race(df: pd.DataFrame, Ns: Sequence[int], sel: Selected) -> dict[str, list[dict]]:
+    """Per N, two comparisons of our fastest exact configuration (direct or multigrid route) with
+    the fastest other configuration, both by their selected runs' median times: ``same_warm_start``
+    — ours from the cascade against the solvers started from the cascade's interpolated coarse
+    solution (the start's cost included) — and ``cold_against_cold`` — ours from the cold start
+    against the others from u = 0.  The ratio (other / ours) with its interval and verdict; empty
+    without the selected runs of a side."""
+    start = starts(df)
     exact = df["tol_label"] == EXACT_LABEL
-    cold = df["label"].astype(str).str.contains("cold")
-    return pd.Series(np.where(exact & ~cold, "cascade", "cold"), index=df.index)
+    out: dict[str, list[dict]] = {}
+    for key, kind in (("same_warm_start", "cascade"), ("cold_against_cold", "cold")):
+        ours = [c for c in dict.fromkeys(df.loc[exact & (start == kind), "config"]) if sel.tolerance.get(c)]
+        others = [c for c in dict.fromkeys(df.loc[~exact & (start == kind), "config"]) if sel.tolerance.get(c)]
+        if not ours or not others:
+            continue
+        rows = []
+        for N in Ns:
+            mine, theirs = sel.at(N, ours), sel.at(N, others)
+            if not mine or not theirs:
+                continue
+            a, b = min(mine, key=lambda c: mine[c].value), min(theirs, key=lambda c: theirs[c].value)
+            rows.append(
+                {"N": N, "ours": sel.entry(a, N), "other": sel.entry(b, N), "ratio": _ratio(theirs[b], mine[a])}
+            )
+        out[key] = rows
+    return out
 
 
-def _cheapest(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> dict[int, dict[str, dict]]:
-    """Per N and config, the fastest run (by ``RANK_KEY``) that leaves Table 1's row of that N
-    unchanged: its tolerance, its seconds and the value it is ranked by."""
-    key = RANK_KEY
-    cheapest: dict[int, dict[str, dict]] = {}
-    for N in Ns:
-        cheapest[N] = {}
-        for config in dict.fromkeys(df["config"]):
-            rows = df[(df["config"] == config) & (df["N"] == N)]
-            good = [r for _, r in rows.iterrows() if _unchanged(r, t1)]
-            if good:
-                fastest = min(good, key=lambda r: float(r[key]))
-                cheapest[N][config] = {
-                    "tol_label": str(fastest["tol_label"]),
-                    "time_s": float(fastest["time_s"]),
-                    "rank": float(fastest[key]),
-                }
-    return cheapest
+def _scaling(df: pd.DataFrame, Ns: Sequence[int], sel: Selected) -> dict[str, dict]:
+    """Per configuration with a selected tolerance: the exponent ``p`` of ``time ∝ unknowns^p``,
+    least squares through its selected runs on every mesh, with its interval."""
+    n_dofs = df.drop_duplicates("N").set_index("N")["n_dofs"]
+    out = {}
+    for config, label in sel.tolerance.items():
+        if label is not None:
+            fit = unc.exponent([float(n_dofs[N]) for N in Ns], [sel.est[(config, N)] for N in Ns])
+            out[config] = fit.summary()
+    return out
 
 
 def _l4_eocs(
     df: pd.DataFrame, Ns: Sequence[int], paper_rates: Sequence[float] | None, paper_l4: Mapping[int, float] | None
 ) -> list[dict]:
-    """Per (config, tolerance) with an answer on every mesh: the ``L⁴`` EOCs and their largest
-    deviations from the published and from the exact EOCs."""
+    """Per (config, tolerance) with an answer on every mesh (whatever its status: the question is
+    what inexact solves do to the EOCs): the ``L⁴`` EOCs and their largest deviations from the
+    published and from the exact EOCs."""
     from signorini.fem.convergence import eoc
 
     h = np.array([1.0 / N for N in Ns])
@@ -174,30 +213,33 @@ def _l4_eocs(
     return eocs
 
 
-def _exact_cost(df: pd.DataFrame, Ns: Sequence[int]) -> dict[str, Any]:
-    """The exact solver's times and total errors per N, and the slope of error against time."""
-    exact_rows = df[df["tol_label"] == EXACT_LABEL]
-    if exact_rows.empty:
+def _exact_cost(Ns: Sequence[int], sel: Selected) -> dict[str, Any]:
+    """The first exact configuration's selected runs: assembly and solve times per N, total errors,
+    and the slope of log error against log total time (assembly + solve) with its interval and the
+    time factor per digit, ``10^(−1/slope)``."""
+    first = next((c for c, lab in sel.tolerance.items() if lab == EXACT_LABEL), None)
+    if first is None:
         return {}
-    first = exact_rows["config"].iloc[0]
-    ex = exact_rows[exact_rows["config"] == first].set_index("N")
-    ex = ex.loc[[N for N in Ns if N in ex.index]]
-    total_time = (ex["build_s"] + ex["time_s"]).to_numpy(dtype=float)
+    rows = [sel.row[(first, N)] for N in Ns]
+    build = [float(r["build_s"]) for r in rows]
+    total = [unc.shifted(sel.est[(first, N)], b) for N, b in zip(Ns, build, strict=True)]
     exact = {
         "config": first,
-        "label": str(ex["label"].iloc[0]),
-        "N": ex.index.tolist(),
-        "build_s": ex["build_s"].tolist(),
-        "time_s": ex["time_s"].tolist(),
-        "total_time_s": total_time.tolist(),
+        "label": str(rows[0]["label"]),
+        "N": list(Ns),
+        "build_s": build,
+        "time": [_time(r) for r in rows],
+        "total_time": [t.summary() for t in total],
     }
     for n in ("L4", "W14"):
-        if f"total_{n}" in ex.columns and len(ex) >= 2:
-            err = ex[f"total_{n}"].to_numpy(dtype=float)
-            slope = float(np.polyfit(np.log10(total_time), np.log10(err), 1)[0])
-            exact[f"total_{n}"] = err.tolist()
+        if f"total_{n}" in rows[0] and len(rows) >= 2:
+            err = [float(r[f"total_{n}"]) for r in rows]
+            slope = unc.exponent(total, err).summary()
+            exact[f"total_{n}"] = err
             exact[f"slope_{n}"] = slope
-            exact[f"time_factor_per_digit_{n}"] = 10.0 ** (-1.0 / slope) if slope < 0 else math.inf
+            exact[f"time_factor_per_digit_{n}"] = {
+                k: (10.0 ** (-1.0 / slope[k]) if slope[k] < 0 else math.inf) for k in ("value", "lo", "hi")
+            }
     return exact
 
 
@@ -224,121 +266,21 @@ def _closest_l4(df: pd.DataFrame, paper_l4: Mapping[int, float] | None) -> dict[
 
 
 def is_peer(df: pd.DataFrame) -> pd.Series:
-    """The rows of PETSc peers (``solver`` ``petsc_snes``/``petsc_tao``; none without the column)."""
-    import pandas as pd
-
-    if "solver" not in df.columns:
-        return pd.Series(False, index=df.index)
+    """The rows of PETSc peers (``solver`` ``petsc_snes``/``petsc_tao``)."""
     return df["solver"].astype(str).str.startswith("petsc_")
 
 
-def _fit_exponent(n_dofs: Sequence[float], times: Sequence[float]) -> float:
-    """Least-squares slope of log time against log unknowns (NaN with fewer than 2 points)."""
-    if len(times) < 2:
-        return math.nan
-    return float(np.polyfit(np.log(np.asarray(n_dofs, dtype=float)), np.log(np.asarray(times, dtype=float)), 1)[0])
-
-
-def _peers(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> dict[str, Any]:
-    """Our cascade against the PETSc peers: per N the fastest peer run that keeps Table 1's
-    digits with status ``ok`` and its time over ours; per peer the time to those digits against
-    the number of unknowns (fit ``time ∝ unknowns^p``)."""
+def _peers(df: pd.DataFrame) -> dict[str, dict]:
+    """Per PETSc peer configuration: its label, the statuses of all its runs, PETSc's reasons."""
     peers = df[is_peer(df)]
-    exact = df[df["tol_label"] == EXACT_LABEL]
-    if peers.empty or exact.empty:
-        return {}
-    ours_config = str(exact["config"].iloc[0])
-    n_dofs = df.drop_duplicates("N").set_index("N")["n_dofs"]
-    cheapest = _cheapest(df[df["status"] == "ok"], Ns, t1)
-    names = list(dict.fromkeys(peers["config"]))
-    ratio = []
-    for N in Ns:
-        ours = cheapest.get(N, {}).get(ours_config)
-        runs = {c: v for c, v in cheapest.get(N, {}).items() if c in names}
-        best = min(runs.items(), key=lambda kv: kv[1]["rank"]) if runs else None
-        ratio.append(
-            {
-                "N": N,
-                "ours_s": ours["time_s"] if ours else math.nan,
-                "peer": best[0] if best else None,
-                "peer_tol": best[1]["tol_label"] if best else None,
-                "peer_s": best[1]["time_s"] if best else math.nan,
-                "ratio": best[1]["rank"] / ours["rank"] if best and ours else math.nan,
-            }
-        )
-    scaling = {}
-    for config in names:
-        points = [(N, float(n_dofs[N]), cheapest[N][config]) for N in Ns if config in cheapest.get(N, {})]
-        rows = peers[peers["config"] == config]
-        scaling[config] = {
+    return {
+        config: {
             "label": str(rows["label"].iloc[0]),
-            "N": [p[0] for p in points],
-            "time_s": [p[2]["time_s"] for p in points],
-            "tol_label": [p[2]["tol_label"] for p in points],
-            "exponent": _fit_exponent([p[1] for p in points], [p[2]["time_s"] for p in points]),
             "statuses": rows["status"].value_counts().to_dict(),
             "reasons": sorted({str(r) for r in rows["converged_reason"] if str(r) and str(r) != "nan"}),
         }
-    ours_rows = [r for r in ratio if math.isfinite(r["ours_s"])]
-    return {
-        "ours": ours_config,
-        "ours_label": str(exact["label"].iloc[0]),
-        "ours_exponent": _fit_exponent([float(n_dofs[r["N"]]) for r in ours_rows], [r["ours_s"] for r in ours_rows]),
-        "ratio": ratio,
-        "scaling": scaling,
-        "any_ok": bool((peers["status"] == "ok").any()),
+        for config, rows in peers.groupby("config", sort=False)
     }
-
-
-def fastest_to_digits(df: pd.DataFrame, N: int, table1_norms: Sequence[str]) -> dict[str, dict]:
-    """Per configuration, its fastest run at ``N`` that keeps Table 1's digits (the report's
-    "fastest route to Table 1's digits")."""
-    return _cheapest(df, [N], table1_norms)[N]
-
-
-def _fastest(cheapest: Mapping, configs: Sequence[str]) -> tuple[str, dict] | None:
-    runs = [(c, v) for c, v in cheapest.items() if c in configs]
-    return min(runs, key=lambda kv: kv[1]["rank"]) if runs else None
-
-
-def _fair_race(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str]) -> dict[str, list[dict]]:
-    """Per N, two comparisons of our fastest exact configuration (direct or multigrid route)
-    with the fastest other solver to Table 1's digits (status ok): ``same_warm_start`` — ours
-    from the cascade against the solvers started from the cascade's interpolated coarse
-    solution (the start's cost included) — and ``cold_against_cold`` — ours from the cold
-    start against the others from u = 0.  Ratios (other / ours) by ``RANK_KEY``; empty without
-    the runs of a side."""
-    start = starts(df)
-    exact = df["tol_label"] == EXACT_LABEL
-    cheapest = _cheapest(df[df["status"] == "ok"], Ns, t1)
-    out: dict[str, list[dict]] = {}
-    for key, kind in (("same_warm_start", "cascade"), ("cold_against_cold", "cold")):
-        ours = list(dict.fromkeys(df.loc[exact & (start == kind), "config"]))
-        others = list(dict.fromkeys(df.loc[~exact & (start == kind), "config"]))
-        if not ours or not others:
-            continue
-        rows = []
-        for N in Ns:
-            mine, best = _fastest(cheapest.get(N, {}), ours), _fastest(cheapest.get(N, {}), others)
-            rows.append(
-                {
-                    "N": N,
-                    "ours": mine[0] if mine else None,
-                    "ours_s": mine[1]["time_s"] if mine else math.nan,
-                    "other": best[0] if best else None,
-                    "other_tol": best[1]["tol_label"] if best else None,
-                    "other_s": best[1]["time_s"] if best else math.nan,
-                    "ratio": best[1]["rank"] / mine[1]["rank"] if best and mine else math.nan,
-                }
-            )
-        out[key] = rows
-    return out
-
-
-def peer_comparison(df: pd.DataFrame, table1_norms: Sequence[str]) -> dict[str, Any]:
-    """``findings(...)["peers"]`` alone (for the figures)."""
-    Ns = sorted(int(N) for N in df["N"].unique())
-    return _peers(df, Ns, [n for n in table1_norms if f"total_{n}" in df.columns])
 
 
 def kernel_spread(df: pd.DataFrame) -> float:
@@ -357,27 +299,40 @@ def kernel_spread(df: pd.DataFrame) -> float:
     return max(ranges) if ranges else math.nan
 
 
-def _protocol(df: pd.DataFrame) -> dict[str, Any]:
-    """What the timing protocol did (tables measured under it): repeats per run, spread, samples
-    rejected and redone, runs accepted under load after the last retry, CPU share, whether the
-    table was measured under the protocol at all."""
+def _protocol(df: pd.DataFrame, protocol: Protocol) -> dict[str, Any]:
+    """What the timing protocol did: why each timed run's sampling stopped (``time_stop``), how many
+    samples the runs with an answer have, the median relative spread of their samples (runs with
+    two or more), overall and for the runs short enough that the budget holds ``min_repeats``
+    samples; calls per sample, samples rejected and redone, runs accepted under load, CPU share."""
     timed = df[df["status"] != "skipped"]
-    if not measured_under_protocol(df) or timed.empty:
-        return {"measured": False}
+    stop = timed["time_stop"].fillna("").astype(str)
+    answered = timed[timed["status"].isin(["ok", "inaccurate"])]
+    counts = answered["times"].map(lambda t: unc.samples(t).size).to_numpy(dtype=int)
+    spread, seconds = pd_numeric(answered, "spread"), answered["time_s"].to_numpy(dtype=float)
+    several = counts >= 2
+    short_s = protocol.budget_s / protocol.min_repeats
 
-    def col(name: str) -> np.ndarray:
-        return pd_numeric(timed, name)
+    def median(values: np.ndarray) -> float:
+        return float(np.median(values)) if values.size else math.nan
 
-    runs, spread, share, calls = col("time_runs"), col("spread"), col("cpu_share"), col("calls")
+    share, calls = pd_numeric(timed, "cpu_share"), pd_numeric(timed, "calls")
     return {
-        "measured": True,
-        "runs": int(np.isfinite(runs).sum()),
-        "repeats_median": float(np.nanmedian(runs)) if np.isfinite(runs).any() else math.nan,
-        "repeats_max": float(np.nanmax(runs)) if np.isfinite(runs).any() else math.nan,
+        "timed": int((stop != "").sum()),
+        "stops": {k: int((stop == k).sum()) for k in STOPS},
+        "raised": int((stop == "").sum()),  # failed at the first call, before any summary
+        "answered": int(counts.size),
+        "samples": {int(k): int(v) for k, v in zip(*np.unique(counts, return_counts=True), strict=True)},
+        "samples_min": int(counts.min()) if counts.size else 0,
+        "samples_median": median(counts.astype(float)),
+        "samples_max": int(counts.max()) if counts.size else 0,
+        "spread_median": median(spread[several]),
+        "several": int(several.sum()),
+        "short_s": short_s,
+        "spread_median_short": median(spread[several & (seconds < short_s)]),
+        "short": int((several & (seconds < short_s)).sum()),
         "calls_max": float(np.nanmax(calls)) if np.isfinite(calls).any() else 1.0,
-        "spread_median": float(np.nanmedian(spread)) if np.isfinite(spread).any() else math.nan,
-        "rejected": int(np.nansum(col("rejected"))),
-        "loaded": int(np.nansum(col("loaded"))),
+        "rejected": int(np.nansum(pd_numeric(timed, "rejected"))),
+        "loaded": int(np.nansum(pd_numeric(timed, "loaded"))),
         "cpu_share_median": float(np.nanmedian(share)) if np.isfinite(share).any() else math.nan,
         "kernel_spread": kernel_spread(timed),
     }
@@ -407,23 +362,34 @@ def concurrent_jobs(starts: np.ndarray, ends: np.ndarray) -> int:
     return peak
 
 
+def _software(df: pd.DataFrame) -> dict[str, Any]:
+    """What the table records of the machine and the software: the PETSc versions of the peers'
+    runs (``peer_info``), and the distinct machine records (``machine``, JSON; absent from tables
+    measured before it was recorded) with the number of runs of each."""
+    petsc = sorted({str(v).split(":")[0] for v in df["peer_info"] if str(v).startswith("PETSc")})
+    column = df["machine"] if "machine" in df.columns else []
+    records = [str(v) for v in column if isinstance(v, str) and v.strip()]
+    machines = [{"record": json.loads(text), "runs": records.count(text)} for text in dict.fromkeys(records)]
+    return {"petsc": petsc, "machines": machines, "unrecorded": len(df) - len(records)}
+
+
 def _machine(df: pd.DataFrame) -> dict[str, Any]:
     """Load average at the measurements, wall-clock span of the jobs, their summed time, how many
     ran at once, status counts."""
     load = df[df["status"] != "skipped"]["load1"].to_numpy(dtype=float)
     load = load[np.isfinite(load)]
     jobs = df.drop_duplicates(["N", "config"])
-    starts = jobs["job_started"].to_numpy(dtype=float)
-    ends = starts + jobs["job_wall_s"].to_numpy(dtype=float)
+    started = jobs["job_started"].to_numpy(dtype=float)
+    ends = started + jobs["job_wall_s"].to_numpy(dtype=float)
     return {
         "load": {"min": float(np.min(load)), "median": float(np.median(load)), "max": float(np.max(load))}
         if load.size
         else {},
-        "protocol": _protocol(df),
-        "span_s": float(np.nanmax(ends) - np.nanmin(starts)) if len(df) else math.nan,
+        "span_s": float(np.nanmax(ends) - np.nanmin(started)) if len(df) else math.nan,
         "job_time_s": float(jobs["job_wall_s"].sum()),
-        "concurrent_jobs": concurrent_jobs(starts, ends),
+        "concurrent_jobs": concurrent_jobs(started, ends),
         "counts": df["status"].value_counts().to_dict(),
+        "software": _software(df),
     }
 
 
@@ -432,16 +398,28 @@ def findings(
     table1_norms: Sequence[str],
     paper_l4: Mapping[int, float] | None = None,
     paper_l4_eoc: Mapping[int, float] | None = None,
+    protocol: Protocol | None = None,
 ) -> dict:
     """The numbers ``work_precision.md`` states, computed from the measurement table.
 
+    Every time below is a run's median with its interval, ``{value, lo, hi, interval, samples}``,
+    and every ratio ``{value, lo, hi, interval, verdict}`` (``uncertainty``); every time compared
+    is a selected run (``selection``).
+
     - ``cells``: per (config, tolerance), how many Table 1 cells (``table1_norms`` × N) print
-      differently (5 significant digits) from the exact solution's, the worst relative change
-      of a total error, the statuses per N (``answered``: an answer at every N).
-    - ``needed``: per QP config, the loosest swept tolerance from which every tighter swept
-      tolerance leaves all Table 1 cells unchanged at every N (None: none does).
-    - ``cheapest``: per N and config, the fastest run that leaves Table 1's row of that N
-      unchanged (its tolerance and time).
+      differently (5 significant digits) from the exact solution's, the worst relative change of a
+      total error, the statuses per N (``answered``: an answer at every N), the meshes on which
+      the run keeps Table 1's digits (``keeping``), whether it is the selected tolerance, and the
+      time on the finest mesh.
+    - ``tolerance``: per configuration its selected tolerance (None: none); ``needed``: the same
+      for the configurations that are not exact.
+    - ``selected``: per N and configuration, the selected run's tolerance and time.
+    - ``fastest``: the selected runs on the finest mesh by time, each with its ratio to the fastest.
+    - ``fair``: ``_fair_race``: per N our fastest exact configuration against the fastest other
+      one, from the same (cascade) warm start and cold against cold.
+    - ``scaling``: per configuration with a selected tolerance, the exponent ``p`` of
+      ``time ∝ unknowns^p`` through its selected runs, with its interval.
+    - ``peers``: per PETSc peer, the statuses of its runs and PETSc's converged reasons.
     - ``eoc``: per (config, tolerance) with an answer at every N, the ``L⁴`` EOCs of the total
       error, and the largest deviation from the published (``paper_l4_eoc``: N → EOC) and from
       the exact EOCs; ``paper_l4`` (N → published L⁴ error) gives the relative deviation of the
@@ -450,33 +428,32 @@ def findings(
       ``L⁴``/``W^{1,4}`` errors against total time (assembly + solve) with the time factor per digit.
     - ``closest_l4``: per N with a published ``L⁴`` cell, the run whose total ``L⁴`` error is
       closest to it (relative deviation), next to the exact solution's deviation.
-    - ``peers``: our cascade against the PETSc peers (``_peers``): per N the fastest peer run
-      that keeps Table 1's digits with status ``ok``, its time and its ratio to ours; per peer
-      the time to those digits per N and the exponent ``p`` of ``time ∝ unknowns^p``.
-    - ``fair``: ``_fair_race``: per N our fastest exact configuration against the fastest other
-      solver to Table 1's digits, from the same (cascade) warm start and cold against cold.
-    - ``protocol``: what the timing protocol did (``_protocol``); ratios and rankings use
-      ``RANK_KEY`` (CPU seconds).
-    - ``load``/``span_s``/``job_time_s``/``concurrent_jobs``/``counts``: the load average at the
-      measurements, the wall-clock span of the measurement jobs, their summed run time, the most
-      of them that ran at once, and the status counts.
+    - ``protocol``: what the timing protocol (``protocol``, default its defaults) did (``_protocol``).
+    - ``load``/``span_s``/``job_time_s``/``concurrent_jobs``/``counts``/``software``: the load
+      average at the measurements, the wall-clock span of the measurement jobs, their summed run
+      time, the most of them that ran at once, the status counts, and the machine and software
+      the table records.
     """
     Ns = sorted(int(N) for N in df["N"].unique())
     t1 = [n for n in table1_norms if f"total_{n}" in df.columns]
-    cells = _cell_changes(df, Ns, t1)
-    cheapest = _cheapest(df, Ns, t1)
+    sel = Selected(df, t1)
+    exact_configs = set(df.loc[df["tol_label"] == EXACT_LABEL, "config"])
     paper_rates = [paper_l4_eoc.get(N, math.nan) for N in Ns[1:]] if paper_l4_eoc else None
     return {
         "N": Ns,
         "table1_norms": t1,
-        "cells": cells,
-        "needed": _needed(cells),
-        "cheapest": cheapest,
-        "peers": _peers(df, Ns, t1),
-        "fair": _fair_race(df, Ns, t1),
+        "cells": _cell_changes(df, Ns, t1, sel.tolerance),
+        "tolerance": sel.tolerance,
+        "needed": {c: t for c, t in sel.tolerance.items() if c not in exact_configs},
+        "selected": {N: {c: sel.entry(c, N) for c in sel.at(N)} for N in Ns},
+        "fastest": _fastest(sel, Ns[-1]),
+        "fair": _fair_race(df, Ns, sel),
+        "scaling": _scaling(df, Ns, sel),
+        "peers": _peers(df),
         "eoc": _l4_eocs(df, Ns, paper_rates, paper_l4),
         "paper_l4_eoc": paper_rates,
-        "exact": _exact_cost(df, Ns),
+        "exact": _exact_cost(Ns, sel),
         "closest_l4": _closest_l4(df, paper_l4),
+        "protocol": _protocol(df, protocol or Protocol()),
         **_machine(df),
     }

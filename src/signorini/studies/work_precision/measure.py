@@ -6,7 +6,9 @@ What is measured, per mesh ``N`` and per *solver configuration* (``study_configs
   driver's CPU time around PETSc's ``solve``), the median of the repeats of the timing protocol
   (``timing``): ``wall_s`` the wall time, ``time_ref`` the time in reference units (against
   a sparse reference kernel timed before and after every call), ``cpu_share`` CPU over wall,
-  ``spread``, ``time_runs``, ``rejected``, ``loaded``, ``load1`` (1-minute load average).
+  ``spread``, ``time_runs``, ``rejected``, ``loaded``, ``load1`` (1-minute load average);
+  ``machine`` (``machine_record``, JSON): the cores, the CPU model, the virtualisation, the thread
+  settings and the software versions of the job that measured it.
   For the active-set solver the call is ``solve_discrete`` (a cascade warm start includes
   building and solving the coarse levels); for cvxpy it is ``cvxpy_solve`` (cvxpy's
   canonicalisation included; the QP solver's own time is ``solver_time_s``); a peer started
@@ -37,9 +39,11 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import json
 import logging
 import math
 import os
+import platform
 import re
 import tempfile
 import time
@@ -264,6 +268,52 @@ def skip_reason(
     return None
 
 
+SOFTWARE = ("numpy", "scipy", "cvxpy")  # the distributions whose versions a record names, with Python's
+
+
+def _read(path: Path) -> str:
+    try:
+        return path.read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return ""
+
+
+def machine_record(
+    environ: Mapping[str, str] | None = None,
+    cpuinfo: Path = Path("/proc/cpuinfo"),
+    product: Path = Path("/sys/class/dmi/id/product_name"),
+) -> dict[str, Any]:
+    """What a measurement ran on: ``cores`` (``os.cpu_count``), ``usable_cores`` (the affinity
+    mask), ``cpu_model`` (``model name`` of ``cpuinfo``; "" unknown), ``hypervisor`` (the CPU's
+    ``hypervisor`` flag: the machine is virtualised; None without ``cpuinfo``), ``product`` (the
+    firmware's product name, e.g. a hypervisor's; "" unknown), ``threads`` (each of
+    ``jobenv.THREAD_VARIABLES`` in ``environ``, default this process's; "" unset) and ``software``
+    (Python's version and those of ``SOFTWARE``)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    from signorini.pipeline.jobenv import THREAD_VARIABLES
+    from signorini.studies.work_precision.timing import usable_cores
+
+    environ = os.environ if environ is None else environ
+    text = _read(cpuinfo)
+    fields = [line.split(":", 1) for line in text.splitlines() if ":" in line]
+    model = next((v.strip() for k, v in fields if k.strip() == "model name"), "")
+    flags = next((v.split() for k, v in fields if k.strip() == "flags"), None)
+    software = {"Python": platform.python_version()}
+    for name in SOFTWARE:
+        with contextlib.suppress(PackageNotFoundError):
+            software[name] = version(name)
+    return {
+        "cores": os.cpu_count(),
+        "usable_cores": usable_cores(),
+        "cpu_model": model,
+        "hypervisor": None if flags is None else "hypervisor" in flags,
+        "product": _read(product).strip(),
+        "threads": {name: environ.get(name, "") for name in THREAD_VARIABLES},
+        "software": software,
+    }
+
+
 def _fingerprint(u: np.ndarray) -> str:
     return hashlib.sha256(np.ascontiguousarray(u).tobytes()).hexdigest()
 
@@ -283,6 +333,7 @@ class _Inputs:
     kernel: ReferenceKernel | None = None
     start: np.ndarray | None = None  # the cascade's start, for a configuration started from it
     start_timing: dict = field(default_factory=dict)
+    machine: str = ""  # machine_record as JSON, the same for every record of the job
 
 
 def _load_inputs(at: SceneMesh, inputs: Mapping[str, Any], conventions: Mapping | None) -> _Inputs:
@@ -332,6 +383,7 @@ def _base_record(inp: _Inputs, config: SolverConfig, tol: float | None) -> dict[
         "start": config.initial,
         "load1": os.getloadavg()[0],
         "build_s": inp.build_s,
+        "machine": inp.machine,
     }
 
 
@@ -455,6 +507,7 @@ def measure_stage(
         inp.peer = PeerRoute(python, driver, str(inputs["system"]), probe(python, driver))
     inp.timer = Timer(Protocol.from_mapping(timing))
     inp.kernel = ReferenceKernel(inp.disc.A)
+    inp.machine = json.dumps(machine_record(), sort_keys=True)
     warm_up(config)
     no_start = _cascade_start(inp, config)
     norm_cache: dict[str, dict[str, float]] = {_fingerprint(inp.exact): inp.disc_err}

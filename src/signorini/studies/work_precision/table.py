@@ -57,6 +57,7 @@ ID_COLUMNS = [
     "job_started",
     "load1",
     "load1_max",
+    "machine",
 ]
 
 
@@ -80,17 +81,18 @@ def table_stage(jsons: Sequence[str | os.PathLike], out_csv: str | os.PathLike) 
 
 
 def read_measurements(path: str | os.PathLike) -> pd.DataFrame:
-    """``work_precision.csv`` as a DataFrame (``reason``/``times`` as strings)."""
+    """``work_precision.csv`` as a DataFrame (``reason``/``times``/``machine`` as strings; a table
+    measured before the ``machine`` column gets it empty)."""
     import pandas as pd
 
     try:
-        dtype = {"reason": str, "times": str, "tol_label": str, "converged_reason": str, "peer_info": str, "start": str}
+        text = ("reason", "times", "tol_label", "converged_reason", "peer_info", "start", "machine")
+        dtype = dict.fromkeys(text, str)
         df = pd.read_csv(path, dtype=dtype, keep_default_na=True, encoding="utf-8")
     except (OSError, ValueError) as err:
         raise CorruptArtifactError(f"{path}: unreadable CSV ({err})") from err
-    df["reason"] = df["reason"].fillna("")
-    df["converged_reason"] = df["converged_reason"].fillna("")
-    df["peer_info"] = df["peer_info"].fillna("")
+    for name in ("reason", "converged_reason", "peer_info", "machine"):
+        df[name] = df[name].fillna("") if name in df.columns else ""
     return df
 
 
