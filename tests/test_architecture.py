@@ -343,3 +343,65 @@ def test_the_thread_variables_are_named_in_one_module():
         if any(name in p.read_text(encoding="utf-8") for name in THREAD_VARIABLES)
     }
     assert naming == {"src/signorini/pipeline/jobenv.py"}
+
+
+def _third_party_imports(top_level_only: bool) -> dict[str, set[str]]:
+    """{imported top-level module: the files of src/ that import it}, standard library and the
+    project's own packages left out; ``top_level_only``: the imports a module runs when imported
+    (not those inside functions, which run only when called)."""
+    import sys
+
+    own = {p.name for p in (ROOT / "src").iterdir() if p.is_dir()}
+    found: dict[str, set[str]] = {}
+    for path in (ROOT / "src").rglob("*.py"):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        nodes = tree.body if top_level_only else list(ast.walk(tree))
+        for node in nodes:
+            if isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                names = [node.module]
+            else:
+                continue
+            for name in (n.split(".")[0] for n in names):
+                if name not in sys.stdlib_module_names and name not in own:
+                    found.setdefault(name, set()).add(str(path.relative_to(ROOT)))
+    return found
+
+
+def _declared() -> tuple[set[str], set[str]]:
+    """The project's dependencies and its extras' (normalised distribution names), from pyproject.toml."""
+    import tomllib
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+
+    def names(specs):
+        return {re.split(r"[<>=!~\[; ]", spec, maxsplit=1)[0].lower().replace("_", "-") for spec in specs}
+
+    extras = [spec for extra in project["optional-dependencies"].values() for spec in extra]
+    return names(project["dependencies"]), names(extras)
+
+
+def _distribution(module: str) -> str:
+    from importlib.metadata import packages_distributions
+
+    dists = packages_distributions().get(module) or [module]  # not installed (an optional extra): its own name
+    return dists[0].lower().replace("_", "-")
+
+
+def test_what_the_package_imports_it_declares():
+    """Every third-party module src/ imports is a dependency of pyproject.toml: one the package
+    imports when imported is required, one imported inside a function (an optional route, the
+    workflow, the notebooks) at least an extra."""
+    required, extras = _declared()
+    at_import = {_distribution(m): files for m, files in _third_party_imports(top_level_only=True).items()}
+    anywhere = {_distribution(m): files for m, files in _third_party_imports(top_level_only=False).items()}
+    plugin = {"snakemake-interface-logger-plugins"}  # the logger plugin's package, loaded by Snakemake only
+    assert _undeclared(at_import, required | plugin) == {}, "imported on import but not in [project] dependencies"
+    assert _undeclared(anywhere, required | extras) == {}, "imported but declared nowhere in pyproject.toml"
+    # the check finds a dependency left out: meshio, which signorini.vtu imports on import
+    assert "meshio" in _undeclared(at_import, (required | plugin) - {"meshio"})
+
+
+def _undeclared(imported: dict[str, set[str]], declared: set[str]) -> dict[str, list[str]]:
+    return {dist: sorted(files) for dist, files in imported.items() if dist not in declared}
