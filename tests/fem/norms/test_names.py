@@ -53,3 +53,36 @@ def test_true_names_and_the_names_of_an_exponent():
     assert [true_name(n) for n in ("L4", "W1inf", "H12_true")] == ["L4_true", "W1inf_true", "H12_true"]
     assert lp_names(6) == ("L6", "W16") and lp_names(2.5) == ("L2.5", "W12.5")
     assert lp_names(math.inf) == ("Linf", "W1inf") and lp_names(4.0) == ("L4", "W14")
+
+
+def test_the_schema_admits_exactly_the_names_the_parser_parses():
+    """The config schema's norm pattern and ``parse_norm_name`` are two statements of one grammar:
+    over every combination of family, exponent, part and suffix (and the named norms) they agree,
+    except that only the parser refuses an exponent below 1 (a value, which the pattern's shape
+    cannot see)."""
+    import itertools
+    import re
+
+    import yaml
+    from helpers import ROOT
+
+    schema = yaml.safe_load((ROOT / "workflow/schemas/config.schema.yaml").read_text(encoding="utf-8"))
+    pattern = re.compile(schema["$defs"]["norm"]["pattern"])
+    exponents = ["", "0", "0.5", "1", "2.5", "4", "16", "inf", "Inf", "1e3", "4.", "99999"]
+    names = {
+        family + p + part + suffix
+        for family, p, part, suffix in itertools.product(
+            ["L", "W1", "H", "X", ""], exponents, ["", "plus", "minus", "boundary"], ["", "_true", "_TRUE"]
+        )
+    } | {"H1", "H12", "L2boundary", "H12_true", "L2boundary_true", "H12plus"}
+
+    def parses(name: str) -> bool:
+        try:
+            parse_norm_name(name)
+        except UnknownNormError:
+            return False
+        return True
+
+    differ = {name for name in names if parses(name) != bool(pattern.match(name))}
+    below_one = {name for name in differ if re.match(r"^(L|W1)0", name)}
+    assert differ == below_one and below_one and not any(parses(name) for name in below_one)
