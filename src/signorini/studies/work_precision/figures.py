@@ -11,7 +11,7 @@ import numpy as np
 
 from signorini.plotting import new_figure, save, styled
 from signorini.published import PAPER_NORMS, label_tex
-from signorini.studies.work_precision.study import FIGURE_NORMS
+from signorini.studies.work_precision.study import FIGURE_NORMS, PEER_SOLVERS
 from signorini.studies.work_precision.table import tolerance_order
 
 TOL_MARKERS = {"exact": "P", "default": "*", "1e-02": "o", "1e-04": "s", "1e-06": "^", "1e-08": "D", "1e-10": "v"}
@@ -25,7 +25,7 @@ def _marker(label: str) -> str:
 # (#F0E442), too weak on white for hollow markers, replaced by a mid grey
 OKABE_ITO = ["#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#000000", "#8C8C8C"]
 MAX_SERIES = len(OKABE_ITO)
-FAMILIES = {"petsc_snes": "PETSc SNES VI", "petsc_tao": "PETSc TAO"}
+FAMILIES = {"snes": "PETSc SNES VI", "tao": "PETSc TAO"}  # by the kind of PETSc object (study.PEER_SOLVERS)
 TIME_LABEL = "solve time [CPU s]"
 # the time panel's series beyond the figure's palette (exact configurations the work-precision figure
 # leaves out): Paul Tol's wine, teal, olive and indigo, none of them an Okabe–Ito colour
@@ -36,7 +36,7 @@ ASSEMBLY = {"color": "0.3", "marker": "s"}
 
 def family(solver: str) -> str:
     """A configuration's solver family: PETSc SNES, PETSc TAO or the QP solver's name."""
-    return FAMILIES.get(solver, solver)
+    return FAMILIES.get(PEER_SOLVERS.get(solver, ""), solver)
 
 
 def figure_series(df, table1_norms: Sequence[str] | None = None) -> list[str]:

@@ -26,7 +26,7 @@ import numpy as np
 
 from signorini.studies.work_precision import uncertainty as unc
 from signorini.studies.work_precision.selection import digits_unchanged, keeps_digits, printed, selected_tolerances
-from signorini.studies.work_precision.study import EXACT_LABEL
+from signorini.studies.work_precision.study import EXACT_LABEL, PEER_SOLVERS
 from signorini.studies.work_precision.table import tolerance_order
 from signorini.studies.work_precision.timing import Protocol
 
@@ -266,8 +266,8 @@ def _closest_l4(df: pd.DataFrame, paper_l4: Mapping[int, float] | None) -> dict[
 
 
 def is_peer(df: pd.DataFrame) -> pd.Series:
-    """The rows of PETSc peers (``solver`` ``petsc_snes``/``petsc_tao``)."""
-    return df["solver"].astype(str).str.startswith("petsc_")
+    """The rows of PETSc peers (``solver`` one of ``study.PEER_SOLVERS``)."""
+    return df["solver"].astype(str).isin(PEER_SOLVERS)
 
 
 def _peers(df: pd.DataFrame) -> dict[str, dict]:
