@@ -159,3 +159,12 @@ def test_true_tables_without_published_cells_give_no_point_set_finding(cells):
     other = cells.copy()
     other["paper"] = np.nan
     assert sm.point_set_findings(other, ()) == []
+
+
+def test_the_figures_section_captions_every_committed_figure():
+    """Every committed PNG has its entry and caption, whichever figures a run has drawn so far."""
+    committed = {p.name for p in (ROOT / FIG).glob("*.png")}
+    assert set(sm.FIGURE_CAPTIONS) == committed
+    lines = sm.figures_section(ROOT / "workflow/report")
+    assert sum(line.startswith("- [`") for line in lines) == len(committed)
+    assert all(len(line) > 80 for line in lines if line.startswith("- [`"))  # a caption, not only a name

@@ -234,12 +234,12 @@ def caption(figure: str, rst: str | os.PathLike) -> str:
     return text.replace("``", "`")
 
 
-def figures_section(figdir: str | os.PathLike, captions_dir: str | os.PathLike) -> list[str]:
-    """One entry per committed figure: its file and its caption."""
+def figures_section(captions_dir: str | os.PathLike) -> list[str]:
+    """One entry per figure of the studies (``FIGURE_CAPTIONS``, all committed in ``paper_figures/``):
+    its file and its caption. The list does not depend on which figures a run has drawn so far."""
     lines = ["## Figures", ""]
     for figure, name in FIGURE_CAPTIONS.items():
-        if (Path(figdir) / figure).exists():
-            lines += [f"- [`{figure}`]({figure}): {caption(figure, Path(captions_dir) / f'{name}.rst')}", ""]
+        lines += [f"- [`{figure}`]({figure}): {caption(figure, Path(captions_dir) / f'{name}.rst')}", ""]
     return lines
 
 
@@ -313,13 +313,12 @@ def sections(inputs: Mapping[str, str], sources: Mapping[str, str]) -> list[tupl
 def summary_stage(
     inputs: Mapping[str, str], sources: Mapping[str, str], captions_dir: str | os.PathLike, out_md: str | os.PathLike
 ) -> None:
-    """``summary.md``: every section's findings, then the committed figures (next to ``out_md``) with
-    their captions (``captions_dir``: the report's ``.rst`` files)."""
+    """``summary.md``: every section's findings, then the studies' figures with their captions
+    (``captions_dir``: the report's ``.rst`` files)."""
     lines = [INTRO.format(strengths=STRENGTHS)]
     for title, verdicts in sections(inputs, sources):
         lines += [f"## {title}", "", *_bullets(verdicts), ""]
-    figdir = Path(out_md).parent
-    lines += figures_section(figdir, captions_dir)
+    lines += figures_section(captions_dir)
     atomic_write_text(out_md, "\n".join(lines).rstrip() + "\n")
 
 
