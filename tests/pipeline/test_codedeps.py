@@ -72,3 +72,28 @@ def test_the_import_cache_holds_only_while_a_file_is_unchanged(tmp_path):
     cache_file.write_text("{truncated")  # a damaged cache is an empty one
     assert closure() == {"__init__.py", "a.py", "c.py"}
     assert json.loads(cache_file.read_text())
+
+
+def test_a_module_written_after_its_importer_was_cached_is_found(tmp_path):
+    """The cache keeps the names a file imports, not the files they were then: a module created
+    after its importer entered the cache (a stage written after the rule's script), moved to a
+    package or deleted, is seen by the next process without the importer changing."""
+    src = tmp_path / "src"
+    (src / "signorini").mkdir(parents=True)
+    (src / "signorini/__init__.py").write_text("")
+    script, cache_file = tmp_path / "script.py", tmp_path / "imports.json"
+    script.write_text("from signorini.stage import run\n")
+
+    def closure() -> set[str]:
+        cache = ImportCache(cache_file)  # a new process
+        found = {p.relative_to(src).as_posix() for p in import_closure(script, src, cache)}
+        cache.save()
+        return found
+
+    assert closure() == {"signorini/__init__.py"}  # the stage is not written yet
+    (src / "signorini/stage.py").write_text("")
+    assert closure() == {"signorini/__init__.py", "signorini/stage.py"}
+    (src / "signorini/stage.py").unlink()
+    (src / "signorini/stage").mkdir()
+    (src / "signorini/stage/__init__.py").write_text("")
+    assert closure() == {"signorini/__init__.py", "signorini/stage/__init__.py"}

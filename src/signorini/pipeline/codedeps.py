@@ -77,20 +77,29 @@ def _digest(path: Path) -> str:
 
 
 @cache
-def _direct(path: Path, src: Path, digest: str) -> frozenset[Path]:
-    """Package files one file imports directly (with the ``__init__.py`` of their packages);
-    ``digest``, of the file's content, keys the memo."""
+def _imported_names(path: Path, src: Path, digest: str) -> tuple[str, ...]:
+    """The dotted names one file imports, with the packages on the way (Python runs their
+    ``__init__.py``); ``digest``, of the file's content, keys the memo."""
     module = _module_name(path, src) if path.is_relative_to(src) else "__main__"
     tree = ast.parse(path.read_text(encoding="utf-8"), filename=str(path))
-    found: set[Path] = set()
+    names: set[str] = set()
     for name in _imports(tree, module, path.name == "__init__.py"):
         parts = name.split(".")
-        for k in range(1, len(parts) + 1):  # the packages on the way run too
-            target = _module_file(".".join(parts[:k]), src)
-            if target is not None:
-                found.add(target)
+        names.update(".".join(parts[:k]) for k in range(1, len(parts) + 1))
+    return tuple(sorted(n for n in names if n == PACKAGE or n.startswith(PACKAGE + ".")))
+
+
+def _resolve(path: Path, names: tuple[str, ...] | list[str], src: Path) -> frozenset[Path]:
+    """The package files of ``names`` as they are now: a module written after its importer was
+    read is found, one that was deleted is not."""
+    found = {target for name in names if (target := _module_file(name, src)) is not None}
     found.discard(path)
     return frozenset(found)
+
+
+def _direct(path: Path, src: Path, digest: str) -> frozenset[Path]:
+    """Package files one file imports directly (with the ``__init__.py`` of their packages)."""
+    return _resolve(path, _imported_names(path, src, digest), src)
 
 
 class ImportCache:
@@ -109,15 +118,17 @@ class ImportCache:
         self._changed = False
 
     def direct(self, path: Path, src: Path) -> frozenset[Path]:
-        """``path``'s direct package imports under ``src``, from the cache when the file is unchanged."""
-        key, digest = f"{src}::{path}", _digest(path)
+        """``path``'s direct package imports under ``src``: the imported names from the cache when
+        the file is unchanged, resolved to files as they are now (the cache holds names, not files,
+        so that a module created, moved or deleted after its importer was read is seen)."""
+        key, digest = f"names::{src}::{path}", _digest(path)
         entry = self._entries.get(key)
         if isinstance(entry, list) and len(entry) == 2 and entry[0] == digest:
-            return frozenset(Path(p) for p in entry[1])
-        found = _direct(path, src, digest)
-        self._entries[key] = [digest, sorted(map(str, found))]
+            return _resolve(path, entry[1], src)
+        names = _imported_names(path, src, digest)
+        self._entries[key] = [digest, list(names)]
         self._changed = True
-        return found
+        return _resolve(path, names, src)
 
     def save(self) -> None:
         """Write the cache if it gained entries (best effort: a read-only directory keeps none)."""
