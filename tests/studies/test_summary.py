@@ -106,10 +106,14 @@ def test_captions_pick_the_figures_paragraphs(tmp_path):
     assert sm.caption("other.png", rst).startswith("**Scene**: intro.")
 
 
-def test_missing_sources_are_named():
-    sources = {"stability": "nowhere/stability.csv"}
-    (verdict,) = sm._missing(sources, ("stability",))
-    assert verdict.strength == "open" and "snakemake -c2 stability" in verdict.text
+def test_missing_sources_are_named_with_the_target_that_writes_them(tmp_path, monkeypatch):
+    from signorini.pipeline.paths import FIGURES
+
+    monkeypatch.chdir(tmp_path)  # where no study has written anything
+    sources = {"stability": FIGURES["stability_atlas"]["csv"], "theory": FIGURES["contact_set"]["csv"]}
+    stability, contact = sm._missing(sources, ("stability", "theory"))
+    assert stability.strength == "open" and "snakemake -c2 stability" in stability.text
+    assert "snakemake -c2 theory" in contact.text and sm.target_of(FIGURES["summary"]["md"]) == "all"
 
 
 def test_every_committed_finding_regenerates_from_the_committed_files():

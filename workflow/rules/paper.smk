@@ -120,7 +120,7 @@ rule load_rule:
     """Table 1's norms with the load vector integrated by the norms' 16-point rule, as the paper states."""
     input:
         systems=expand(rules.discretise.output.npz, scene=FIG, N=scene_of(FIG)["N"]),
-        solutions=expand(rules.solve.output.npz, scene=FIG, N=scene_of(FIG)["N"]),
+        norms=flat(norm_jsons(FIG, TABLE1_NORMS)),
         code=code("load_rule"),
     output:
         csv=PATHS["load_rule_csv"].format(scene=FIG),
@@ -133,6 +133,7 @@ rule load_rule:
         problem=scene_of(FIG)["problem"],
         diagonal=scene_of(FIG)["diagonal"],
         conventions=scene_of(FIG)["conventions"],
+        norm_jsons=norm_jsons(FIG, TABLE1_NORMS),
     script:
         "../scripts/load_rule.py"
 

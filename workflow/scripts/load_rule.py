@@ -9,4 +9,4 @@ snakemake = globals()["snakemake"]  # injected by the script: directive
 with job_log(snakemake):
     p = snakemake.params
     meshes = [SceneMesh(dict(p.problem), int(N), str(p.diagonal)) for N in p.N]
-    load_rule_stage(meshes, list(snakemake.input.solutions), p.conventions, snakemake.output.csv)
+    load_rule_stage(meshes, list(snakemake.input.systems), p.norm_jsons, p.conventions, snakemake.output.csv)

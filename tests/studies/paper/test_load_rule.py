@@ -9,9 +9,11 @@ import pytest
 from signorini.fem.assembly import load_vector
 from signorini.fem.discrete import build
 from signorini.fem.mesh import friedrichs_keller
+from signorini.fem.norms.conventional import evaluate_norms
 from signorini.fem.norms.conventions import Conventions
 from signorini.fem.problem import Problem
 from signorini.fem.solve import solve_discrete
+from signorini.pipeline.artifacts import save_npz
 from signorini.published import TABLE1_NORMS
 from signorini.studies.paper.load_rule import COLUMNS, compare_load_rules, load_rule_stage, load_vector_by_rule
 from signorini.studies.scene.store import SceneMesh
@@ -42,23 +44,43 @@ def test_rules_differ_for_the_manufactured_load():
     assert 0 < change < 1e-2
 
 
-def test_stage_table():
+def test_stage_table(tmp_path):
+    """On the assembled system: the default column is what was given, the change is computed."""
     at = SceneMesh(PARAMS, 21, "sw_ne")
-    u = solve_discrete(build(at.problem, at.N, at.diagonal), "active_set").u
-    rows = compare_load_rules(at, u, Conventions())
-    assert [r[2] for r in rows] == list(TABLE1_NORMS)
+    disc = build(at.problem, at.N, at.diagonal)
+    system = tmp_path / "system.npz"
+    save_npz(
+        system,
+        N=np.array(at.N),
+        data=disc.A.data,
+        indices=disc.A.indices,
+        indptr=disc.A.indptr,
+        shape=np.array(disc.A.shape),
+        b=disc.b,
+        boundary=disc.boundary,
+    )
+    u = solve_discrete(disc, "active_set").u
+    ours = evaluate_norms(at.problem, disc.mesh, u, list(TABLE1_NORMS), Conventions())
+    rows = compare_load_rules(at, system, ours, Conventions())
+    assert [r[2] for r in rows] == list(TABLE1_NORMS) and [r[3] for r in rows] == list(ours.values())
     for row in rows:
         assert row[5] == pytest.approx((row[4] - row[3]) / row[3])
-        assert abs(row[5]) < 0.05 and row[7] < 1e-8
+        assert 0 < abs(row[5]) < 0.05 and row[7] < 1e-8 and 0 < row[6] < 1e-2
 
 
-def test_stage_writes_every_mesh(tmp_path, monkeypatch):
+def test_stage_reads_each_meshs_norm_artifacts(tmp_path, monkeypatch):
     import signorini.studies.paper.load_rule as stage
 
     meshes = [SceneMesh(PARAMS, N, "sw_ne") for N in (11, 21)]
-    monkeypatch.setattr(SceneMesh, "load_solution", lambda self, path: np.zeros((self.N + 1) ** 2))
-    monkeypatch.setattr(stage, "compare_load_rules", lambda at, u, conv: [[at.N, at.h, "L4", 1, 1, 0, 0, 0, "q"]])
+    seen = []
+    monkeypatch.setattr(stage, "read_norm", lambda path, name, N: float(N))
+    monkeypatch.setattr(
+        stage,
+        "compare_load_rules",
+        lambda at, system, ours, conv: seen.append((system, ours)) or [[at.N, at.h, "L4", 1, 1, 0, 0, 0, "q"]],
+    )
     out = tmp_path / "load_rule.csv"
-    load_rule_stage(meshes, ["a", "b"], {}, out)
+    load_rule_stage(meshes, ["s11", "s21"], {"L4": ["a", "b"]}, {}, out)
     frame = pd.read_csv(out)
     assert list(frame.columns) == COLUMNS and list(frame.N) == [11, 21]
+    assert seen == [("s11", {"L4": 11.0}), ("s21", {"L4": 21.0})]

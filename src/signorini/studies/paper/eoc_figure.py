@@ -39,13 +39,13 @@ KINDS = {  # column of the tables: how it is drawn and named (the conventions fi
 
 
 def read_errors(*table1_csvs: str | os.PathLike) -> pd.DataFrame:
-    """The errors of the tables (columns ``h`` = ``1/N``, ``norm``, ``convention``, ``true``) as one
-    frame with ``N`` and ``h`` as numbers and ``table``, the index of the table a row is read from,
-    sorted by ``N``; a mesh in several tables is read from the first that holds it."""
+    """The errors of the tables (columns ``h`` = ``1/N``, ``norm``, ``paper``, ``convention``,
+    ``true``) as one frame with ``N`` and ``h`` as numbers and ``table``, the index of the table a row
+    is read from, sorted by ``N``; a mesh in several tables is read from the first that holds it."""
     import pandas as pd
 
     frames = [
-        pd.read_csv(path, usecols=["h", "norm", "convention", "true"], encoding="utf-8").assign(table=k)
+        pd.read_csv(path, usecols=["h", "norm", "paper", "convention", "true"], encoding="utf-8").assign(table=k)
         for k, path in enumerate(table1_csvs)
     ]
     frame = pd.concat(frames, ignore_index=True)

@@ -17,15 +17,14 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 from skfem import MeshTri
 
-from signorini.fem.discrete import build
-from signorini.fem.norms.conventional import _reference_rule, _rolled_t, evaluate_norms
+from signorini.fem.discrete import DiscreteProblem
+from signorini.fem.norms.conventional import _reference_rule, _rolled_t, evaluate_norms, p1_at_points
 from signorini.fem.norms.conventions import Conventions
 from signorini.fem.problem import Problem
 from signorini.fem.solve import solve_discrete
 from signorini.formatting import csv_text
 from signorini.pipeline.artifacts import atomic_write_text
-from signorini.published import TABLE1_NORMS
-from signorini.studies.scene.store import SceneMesh
+from signorini.studies.scene.store import SceneMesh, load_system, read_norm
 
 COLUMNS = ["N", "h", "norm", "default_load", "rule_load", "relative_change", "load_change", "kkt_worst", "quadrature"]
 
@@ -35,53 +34,47 @@ def load_vector_by_rule(mesh: MeshTri, problem: Problem, quadrature: str) -> np.
     collapsed at the vertex the conventions' norms use: the right-hand side as the paper states it."""
     X, W, role = _reference_rule(quadrature)
     t = mesh.t if role is None else _rolled_t(mesh.p, mesh.t, role)
+    n = mesh.p.shape[1]
+    x, _, _, det = p1_at_points(mesh.p, t, np.zeros(n), X)  # the points and |det J| of the rule
     lam = np.vstack([1.0 - X[0] - X[1], X[0], X[1]])  # (3, q): the P1 basis at the points
-    v = mesh.p[:, t]  # (2, 3, E)
-    x = np.einsum("dke,kq->deq", v, lam)
-    det = np.abs((v[0, 1] - v[0, 0]) * (v[1, 2] - v[1, 0]) - (v[0, 2] - v[0, 0]) * (v[1, 1] - v[1, 0]))
     local = (problem.f(x) * W * det[:, None]) @ lam.T  # (E, 3)
-    return np.bincount(t.T.ravel(), local.ravel(), minlength=mesh.p.shape[1])
+    return np.bincount(t.T.ravel(), local.ravel(), minlength=n)
 
 
-def compare_load_rules(at: SceneMesh, u_default: np.ndarray, conv: Conventions) -> list[list]:
-    """Table 1's norms of the scene's solution and of the solution with ``b`` by the norms' rule:
-    one row per norm (``COLUMNS``)."""
-    disc = build(at.problem, at.N, at.diagonal)
-    b_rule = load_vector_by_rule(disc.mesh, at.problem, conv.quadrature)
-    load_change = float(np.max(np.abs(b_rule - disc.b)) / np.max(np.abs(disc.b)))
-    disc.b = b_rule
-    result = solve_discrete(disc, "active_set")
-    names = list(TABLE1_NORMS)
-    ours = evaluate_norms(at.problem, disc.mesh, u_default, names, conv)
-    rule = evaluate_norms(at.problem, disc.mesh, result.u, names, conv)
+def compare_load_rules(
+    at: SceneMesh, system_npz: str | os.PathLike, ours: Mapping[str, float], conv: Conventions
+) -> list[list]:
+    """Table 1's norms of the scene's solution (``ours``, its norm artifacts' values) beside those
+    of the solution with ``b`` by the norms' rule, solved on the scene's assembled system
+    (``system_npz``): one row per norm (``COLUMNS``)."""
+    A, b, boundary = load_system(system_npz, at.N)
+    mesh = at.mesh()
+    b_rule = load_vector_by_rule(mesh, at.problem, conv.quadrature)
+    load_change = float(np.max(np.abs(b_rule - b)) / np.max(np.abs(b)))
+    result = solve_discrete(DiscreteProblem(at.problem, at.N, at.diagonal, mesh, A, b_rule, boundary), "active_set")
+    rule = evaluate_norms(at.problem, mesh, result.u, list(ours), conv)
     kkt = float(result.certificate.worst)
     return [
-        [
-            at.N,
-            at.h,
-            name,
-            ours[name],
-            rule[name],
-            (rule[name] - ours[name]) / ours[name],
-            load_change,
-            kkt,
-            conv.quadrature,
-        ]
-        for name in names
+        [at.N, at.h, name, ours[name], rule[name], (rule[name] - ours[name]) / ours[name], load_change, kkt]
+        + [conv.quadrature]
+        for name in ours
     ]
 
 
 def load_rule_stage(
     meshes: Sequence[SceneMesh],
-    solutions: Sequence[str | os.PathLike],
+    systems: Sequence[str | os.PathLike],
+    norm_jsons: Mapping[str, Sequence[str | os.PathLike]],
     conventions: Mapping,
     out_csv: str | os.PathLike,
 ) -> None:
-    """One row per mesh and Table 1 norm: the norm with the default load vector and with ``b`` by
-    the norms' rule, their relative change, the largest change of ``b`` relative to ``max |b|`` and
-    the certificate's worst relative KKT residual of the new solve."""
+    """One row per mesh and Table 1 norm (the names of ``norm_jsons``, each with its artifact per
+    mesh): the norm with the default load vector and with ``b`` by the norms' rule, their relative
+    change, the largest change of ``b`` relative to ``max |b|`` and the certificate's worst relative
+    KKT residual of the new solve."""
     conv = Conventions(**dict(conventions))
     rows = []
-    for at, path in zip(meshes, solutions, strict=True):
-        rows += compare_load_rules(at, at.load_solution(path), conv)
+    for k, (at, system) in enumerate(zip(meshes, systems, strict=True)):
+        ours = {name: read_norm(paths[k], name, at.N) for name, paths in norm_jsons.items()}
+        rows += compare_load_rules(at, system, ours, conv)
     atomic_write_text(out_csv, csv_text(COLUMNS, rows))
