@@ -16,9 +16,10 @@ fixed rules and point sets); with it, to a relative accuracy of about 1e-4 with 
 
 ``parse_norm_name`` is the only parser: the norms (``fem.norms.conventional``, ``fem.norms.true``), the
 exact norms of a P1 function (``fem.norms.p1``), the expected rates and the labels
-(``signorini.published``) all use it; ``norm_name`` takes a name parsed or not.  ``NORM_PATTERN`` is
-the grammar as one regular expression, the config schema's pattern of a norm name
-(tests/fem/norms/test_names.py holds them equal).
+(``signorini.published``) all use it.  The evaluators take a name parsed or not (``norm_name``), so
+that ``fem.norms.evaluate`` parses each name once.  ``NORM_PATTERN`` is the grammar as one regular
+expression, the config schema's pattern of a norm name (tests/fem/norms/test_names.py holds them
+equal); what each family combines is ``fem.norms.families``.
 """
 
 from __future__ import annotations
