@@ -22,15 +22,8 @@ import numpy as np
 import pandas as pd
 
 from signorini.fem.discrete import build
-from signorini.fem.norms.conventional import (
-    H12_FORMS,
-    MAX_POINTS,
-    QUADRATURES,
-    W1P_FORMS,
-    Conventions,
-    error_field,
-    parse_norm,
-)
+from signorini.fem.norms.conventional import error_field, parse_norm
+from signorini.fem.norms.conventions import H12_FORMS, MAX_POINTS, QUADRATURES, W1P_FORMS, Conventions
 from signorini.fem.problem import Problem
 from signorini.fem.solve import solve_discrete
 from signorini.pipeline.artifacts import load_npz, save_npz

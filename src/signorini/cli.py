@@ -108,7 +108,7 @@ def solve_command(args: argparse.Namespace) -> int:
     import numpy as np
 
     from signorini.fem.discrete import build
-    from signorini.fem.norms.true import evaluate_named_norms
+    from signorini.fem.norms.evaluate import evaluate_named_norms
     from signorini.fem.solve import solve_discrete
 
     try:

@@ -211,11 +211,11 @@ class Scene:
     def norms_for(self, names: Sequence[str], Ns: Sequence[int] | None = None):
         """The named norms of ``u − u_h`` for each ``N`` (DataFrame ``N``, ``h``, names): the
         pipeline's cached value where a norm job exists, else evaluated on the cached
-        solution with the scene's conventions (``fem.norms.true.evaluate_named_norms``)."""
+        solution with the scene's conventions (``fem.norms.evaluate.evaluate_named_norms``)."""
         import pandas as pd
 
         from signorini.fem.mesh import mesh_width
-        from signorini.fem.norms.true import evaluate_named_norms
+        from signorini.fem.norms.evaluate import evaluate_named_norms
 
         rows = []
         for N in Ns or self.Ns:

@@ -161,10 +161,10 @@ def _short(value: object, limit: int = 60) -> str:
 
 def schema_message(error) -> str:
     """A jsonschema ``ValidationError`` in one line: the field, the value and what is allowed."""
-    from signorini.fem.norms.names import GRAMMAR
+    from signorini.fem.norms.names import GRAMMAR, NORM_PATTERN
 
     field, value, kind, arg = field_name(error.absolute_path), error.instance, error.validator, error.validator_value
-    if kind == "pattern" and "L2boundary" in str(arg):  # the norm names: the grammar in words
+    if kind == "pattern" and arg == NORM_PATTERN:  # the norm names: the grammar in words
         return f"{field}: unknown norm {_short(value)}; {GRAMMAR}"
     if kind == "pattern":
         allowed = _CHARACTERS.get(str(arg), f"the form {arg}")

@@ -4,13 +4,18 @@ spelling, and the names outside the grammar."""
 from __future__ import annotations
 
 import math
+import re
 
 import pytest
 
 from signorini.fem.norms.names import (
+    GRAMMAR,
+    NAMED_NORMS,
+    NORM_PATTERN,
     UnknownNormError,
     canonical_norm_name,
     lp_names,
+    norm_name,
     parse_norm_name,
     true_name,
 )
@@ -55,18 +60,28 @@ def test_true_names_and_the_names_of_an_exponent():
     assert lp_names(math.inf) == ("Linf", "W1inf") and lp_names(4.0) == ("L4", "W14")
 
 
+def test_a_parsed_name_is_taken_as_it_is_and_the_grammar_names_every_named_norm():
+    spec = parse_norm_name("W1inf_true")
+    assert norm_name(spec) is spec and norm_name("W1inf_true") == spec
+    with pytest.raises(UnknownNormError):
+        norm_name("W1infplus")
+    for name in NAMED_NORMS:
+        assert name in GRAMMAR and re.match(NORM_PATTERN, name) and re.match(NORM_PATTERN, name + "_true")
+    assert [parse_norm_name(name).p for name in NAMED_NORMS] == list(NAMED_NORMS.values())
+
+
 def test_the_schema_admits_exactly_the_names_the_parser_parses():
     """The config schema's norm pattern and ``parse_norm_name`` are two statements of one grammar:
     over every combination of family, exponent, part and suffix (and the named norms) they agree,
     except that only the parser refuses an exponent below 1 (a value, which the pattern's shape
     cannot see)."""
     import itertools
-    import re
 
     import yaml
     from helpers import ROOT
 
     schema = yaml.safe_load((ROOT / "workflow/schemas/config.schema.yaml").read_text(encoding="utf-8"))
+    assert schema["$defs"]["norm"]["pattern"] == NORM_PATTERN  # the grammar's one regular expression
     pattern = re.compile(schema["$defs"]["norm"]["pattern"])
     exponents = ["", "0", "0.5", "1", "2.5", "4", "16", "inf", "Inf", "1e3", "4.", "99999"]
     names = {

@@ -1,30 +1,33 @@
-"""Norms of the error ``e = u - u_h`` evaluated by quadrature.
+"""Norms of the error ``e = u - u_h`` under the paper's conventions: fixed rules and point sets.
 
 All norms of one mesh are computed from one ``ErrorField``: the values of ``e``
 and ``∇e`` at the points of the triangle rule (and at the vertices and edge
 midpoints of every triangle for the maxima), plus ``e`` and ``∂_t e`` at
-Gauss points of the boundary edges.  A norm is requested by name:
+Gauss points of the boundary edges.  A norm is requested by name (``fem.norms.names``);
+what it combines is its definition (``fem.norms.families``), and here each part is reduced
+under the conventions (``fem.norms.conventions``):
 
-=========  =====================================================================
-``Lp``     ``(∫ |e|^p)^{1/p}`` for any p ≥ 1 (``L2``, ``L4``, ``L16``, ``L2.5``, …)
-``Linf``   ``max |e|`` over the point set ``Conventions.linf_points``
-``W1p``    ``W^{1,p}`` norm in the form ``Conventions.w1p_form`` (``W14``, ``W116``)
-``W1inf``  ``W^{1,∞}`` norm, same form, maximum over ``Conventions.w1inf_points``
-``H1``     ``(‖e‖²_{L²} + ‖∇e‖²_{L²})^{1/2}``
-``H12``    ``H^{1/2}(∂Ω)`` estimate by interpolation, ``Conventions.h12_form``; the boundary
-           integrals split at the free point and at ``x0 ± R`` (``fem.boundary``)
-``L4plus`` / ``L4minus``  ``‖(u - u_h)^±‖_{L⁴}``; any ``Lp`` works with the suffixes
-=========  =====================================================================
+============  =====================================================================================
+``P_SUM``     ``(Σ_parts ∫ |part|^p)^{1/p}`` by the triangle rule ``Conventions.quadrature``:
+              ``s (Σ w |part / s|^p)^{1/p}`` with a power of two ``s``, the integer powers by
+              squarings shared between the norms of one field (``PowerCache``)
+``SQUARES``   the same with ``p = 2`` (``H1``)
+``MAX``       the largest ``|part|`` over the point set ``Conventions.linf_points`` (``Linf``)
+              or ``Conventions.w1inf_points`` (``W1inf``)
+``BOUNDARY``  the ``L²(∂Ω)`` norms of ``e`` and ``∂_t e`` by Gauss–Legendre on the pieces of the
+              boundary edges, split at the free point and at ``x0 ± R`` (``fem.boundary``), and the
+              geometric mean of the factors (``H12``: ``Conventions.h12_form``)
+============  =====================================================================================
 
-These are the paper's conventions (``fem.norms.conventions``: fixed rules and point sets).  The same
-norms evaluated to a stated accuracy, with an error estimate, are the ``<name>_true`` norms of
-``fem.norms.true`` (whose ``evaluate_named_norms`` takes a list of both kinds).
+The same norms evaluated to a stated accuracy, with an error estimate, are the ``<name>_true``
+norms of ``fem.norms.true``; ``fem.norms.evaluate.evaluate_named_norms`` takes a list of both kinds.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import reduce
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -32,7 +35,8 @@ import numpy as np
 from signorini.fem.boundary import boundary_rule
 from signorini.fem.derivatives import u_and_grad_u
 from signorini.fem.norms.conventions import Conventions
-from signorini.fem.norms.names import UnknownNormError, parse_norm_name
+from signorini.fem.norms.families import BOUNDARY, MAX, NormDefinition, define, magnitude, part
+from signorini.fem.norms.names import NormName, UnknownNormError, norm_name
 from signorini.fem.problem import Problem
 from signorini.fem.quadrature import dunavant8, stroud_conical
 
@@ -64,17 +68,19 @@ class ErrorField:
     powers: PowerCache = field(default_factory=lambda: PowerCache(), repr=False, compare=False)
 
     def part(self, name: str) -> np.ndarray:
-        """The array at the quadrature points a norm reduces: ``e``, ``e+`` = max(e, 0), ``e-`` =
-        max(-e, 0), ``d1``, ``d2`` (the partial derivatives) or ``grad`` = |∇e|."""
-        e, de = self.e, self.de
-        return {
-            "e": lambda: e,
-            "e+": lambda: np.maximum(e, 0.0),
-            "e-": lambda: np.maximum(-e, 0.0),
-            "d1": lambda: de[0],
-            "d2": lambda: de[1],
-            "grad": lambda: np.hypot(de[0], de[1]),
-        }[name]()
+        """The array at the quadrature points of the part ``name`` (``fem.norms.families.PARTS``)."""
+        return part(name, self.e, self.de)
+
+    def max_magnitude(self, name: str, points: str) -> np.ndarray:
+        """``|part|`` at the point set of the conventions' field ``points`` (``linf_points``: ``e`` alone
+        there; ``w1inf_points``: ``e`` and ``∇e``)."""
+        e, de = (self.e_max, None) if points == "linf_points" else (self.e_w1, self.de_max)
+        return magnitude(name, e, de)
+
+    def boundary_part(self, name: str) -> np.ndarray:
+        """The array at the boundary Gauss points of the part ``name`` (``fem.norms.families.BOUNDARY_PARTS``):
+        the trace ``e`` or its tangential derivative ``dt``."""
+        return {"e": self.eb, "dt": self.dteb}[name]
 
 
 class PowerCache:
@@ -195,21 +201,20 @@ def boundary_error(
     return eb, dteb, rule.ds
 
 
-def _parts_needed(names: list[str] | None) -> set[str]:
-    """Which evaluations the named norms need: quadrature (``e`` and ``∇e`` at the triangle rule),
-    values (``e`` alone there: the ``Lp`` norms), linf, w1inf, boundary."""
-    if names is None:
+def _evaluations(norms: Sequence[NormDefinition] | None) -> set[str]:
+    """Which evaluations the norms need: quadrature (``e`` and ``∇e`` at the triangle rule),
+    values (``e`` alone there), linf, w1inf (the point sets of the maxima), boundary."""
+    if norms is None:
         return {"quadrature", "linf", "w1inf", "boundary"}
-    parts = set()
-    for name in names:
-        spec = parse_norm_name(name)  # reject unknown names before any work
-        if spec.on_boundary:
-            parts.add("boundary")
-        elif spec.is_max:
-            parts.add("w1inf" if spec.family == "W1" else "linf")
+    needed = set()
+    for norm in norms:
+        if norm.combination == BOUNDARY:
+            needed.add("boundary")
+        elif norm.combination == MAX:
+            needed.add("w1inf" if norm.points == "w1inf_points" else "linf")
         else:
-            parts.add("values" if spec.family == "L" else "quadrature")
-    return parts
+            needed.add("quadrature" if norm.needs_gradient else "values")
+    return needed
 
 
 def error_field(
@@ -217,7 +222,7 @@ def error_field(
     mesh: MeshTri,
     u_h: np.ndarray,
     conventions: Conventions | None = None,
-    norms: list[str] | None = None,
+    norms: Sequence[str | NormName] | None = None,
     elements: np.ndarray | None = None,
 ) -> ErrorField:
     """Evaluate ``e = u - u_h`` and ``∇e`` where the norms need them.
@@ -229,7 +234,14 @@ def error_field(
     memory.
     """
     conv = conventions or Conventions()
-    parts = _parts_needed(norms)
+    needed = _evaluations(None if norms is None else [define(name, conv) for name in norms])
+    return _error_field(problem, mesh, u_h, conv, needed, elements)
+
+
+def _error_field(
+    problem: Problem, mesh: MeshTri, u_h: np.ndarray, conv: Conventions, needed: set[str], elements: np.ndarray | None
+) -> ErrorField:
+    """``error_field`` of the evaluations ``needed`` (``_evaluations``)."""
     cache: dict[str, tuple] = {}
 
     t = mesh.t if elements is None else mesh.t[:, elements]
@@ -265,13 +277,13 @@ def error_field(
         return cache[key]
 
     e = de = dx = e_max = de_max = e_w1 = eb = dteb = dsb = None
-    if parts & {"quadrature", "values"}:
-        e, de, dx = at_quadrature("quadrature" in parts)
-    if "linf" in parts:
+    if needed & {"quadrature", "values"}:
+        e, de, dx = at_quadrature("quadrature" in needed)
+    if "linf" in needed:
         e_max = at_points(conv.linf_points, False)[0]
-    if "w1inf" in parts:
+    if "w1inf" in needed:
         e_w1, de_max = at_points(conv.w1inf_points, True)
-    if "boundary" in parts:
+    if "boundary" in needed:
         # Gauss–Legendre on every piece of every boundary edge, split (and graded) where u is not smooth
         eb, dteb, dsb = boundary_error(problem, mesh, u_h, BOUNDARY_POINTS)
     return ErrorField(e, de, dx, e_max, de_max, e_w1, eb, dteb, dsb, conv)
@@ -340,78 +352,73 @@ def field_p_sum(f: ErrorField, names: tuple[str, ...], p: float) -> float:
     return float(np.sum(total * f.dx) ** (1.0 / p) * scale)
 
 
-def lp_norm(f: ErrorField, p: float, part: str = "") -> float:
-    """(∫ |g|^p)^{1/p} with g = e, e⁺ = max(e, 0) (part "plus") or e⁻ = max(-e, 0) ("minus")."""
-    return field_p_sum(f, ({"": "e", "plus": "e+", "minus": "e-"}[part],), p)
+def boundary_part_norm(f: ErrorField, name: str) -> float:
+    """``‖part‖_{L²(∂Ω)}`` of the boundary part ``name``: ``e`` or ``dt`` = ``∂_t e``, edge by edge."""
+    return scaled_p_sum([f.boundary_part(name)], 2.0, f.dsb)
 
 
-def linf_norm(f: ErrorField, part: str = "") -> float:
-    """max |e| over the max-point set."""
-    g = {"": np.abs(f.e_max), "plus": np.maximum(f.e_max, 0.0), "minus": np.maximum(-f.e_max, 0.0)}[part]
-    return float(g.max())
+def geometric_mean(values: list[float]) -> float:
+    """``(Π values)^{1/n}``, at a power of two near the largest: exact scaling, so the product
+    neither overflows nor underflows."""
+    if len(values) == 1:
+        return float(values[0])
+    scale = power_scale(np.array(values))
+    product = reduce(lambda a, b: a * b, [v / scale for v in values])
+    return float((np.sqrt(product) if len(values) == 2 else product ** (1.0 / len(values))) * scale)
 
 
-def w1p_norm(f: ErrorField, p: float) -> float:
-    """W^{1,p}: components (‖e‖ᵖ + ‖∂₁e‖ᵖ + ‖∂₂e‖ᵖ)^{1/p}, gradient (‖e‖ᵖ + ‖|∇e|‖ᵖ)^{1/p}, or seminorm ‖|∇e|‖_p."""
-    parts = {"components": ("e", "d1", "d2"), "gradient": ("e", "grad")}.get(f.conventions.w1p_form, ("grad",))
-    return field_p_sum(f, parts, p)
+def boundary_norm(f: ErrorField, norm: NormDefinition) -> float:
+    """A norm on ∂Ω: the geometric mean of its factors, each the root of the sum of squares
+    (``hypot``) of the ``L²(∂Ω)`` norms of its parts (``fem.norms.families``: ``L2boundary``, ``H12``)."""
+    norms = {name: boundary_part_norm(f, name) for name in norm.boundary_parts}
+    factors = [reduce(np.hypot, [norms[name] for name in factor]) for factor in norm.factors]
+    return geometric_mean(factors)
 
 
-def w1inf_norm(f: ErrorField) -> float:
-    """W^{1,∞}: max(|e|, |∂₁e|, |∂₂e|) (components), max(|e|, |∇e|) (gradient) or max |∇e| (seminorm)."""
-    form = f.conventions.w1p_form
-    if form == "components":
-        return float(max(np.abs(f.e_w1).max(), np.abs(f.de_max).max()))
-    grad = np.hypot(f.de_max[0], f.de_max[1]).max()
-    return float(grad if form == "seminorm" else max(grad, np.abs(f.e_w1).max()))
+def max_norm(f: ErrorField, norm: NormDefinition) -> float:
+    """The largest ``|part|`` of the norm's parts over its point set (``Linf``, ``W1inf``)."""
+    return float(max(f.max_magnitude(name, norm.points).max() for name in norm.parts))
 
 
-def h1_norm(f: ErrorField) -> float:
-    """(‖e‖²_{L²} + ‖∇e‖²_{L²})^{1/2}."""
-    return field_p_sum(f, ("e", "d1", "d2"), 2.0)
+def field_norm(f: ErrorField, norm: NormDefinition) -> float:
+    """The norm ``norm`` (``fem.norms.families``) of the error field."""
+    if norm.combination == BOUNDARY:
+        return boundary_norm(f, norm)
+    if norm.combination == MAX:
+        return max_norm(f, norm)
+    return field_p_sum(f, norm.parts, norm.p)  # P_SUM, and SQUARES with p = 2
 
 
-def boundary_l2_norm(f: ErrorField) -> float:
-    """‖e‖_{L²(∂Ω)}."""
-    return scaled_p_sum([f.eb], 2.0, f.dsb)
+def _definitions(names: Sequence[str | NormName], conv: Conventions) -> dict[str, NormDefinition]:
+    """{name: its definition} (all names parsed first); a ``_true`` name raises ``UnknownNormError``:
+    those are evaluated by ``fem.norms.true``."""
+    specs = [norm_name(name) for name in names]  # reject unknown names before any work
+    true = [spec.name for spec in specs if spec.true]
+    if true:
+        raise UnknownNormError(
+            f"{true}: a _true norm is evaluated to a stated accuracy by fem.norms.true "
+            "(true_norm, or fem.norms.evaluate.evaluate_named_norms for a mixed list), not under the conventions"
+        )
+    return {spec.name: define(spec, conv) for spec in specs}
 
 
-def boundary_h1_seminorm(f: ErrorField) -> float:
-    """|e|_{H¹(∂Ω)} = ‖∂_t e‖_{L²(∂Ω)}, edge by edge."""
-    return scaled_p_sum([f.dteb], 2.0, f.dsb)
-
-
-def h12_interpolation_norm(f: ErrorField) -> float:
-    """H^{1/2}(∂Ω) estimate ‖e‖_{1/2} ≤ ‖e‖_{L²(∂Ω)}^{1/2} ‖e‖_{H¹(∂Ω)}^{1/2} (H^{1/2} = [L², H¹]_{1/2});
-    with the full H¹(∂Ω) norm (``geometric_full``) or the seminorm (``geometric_semi``)."""
-    l2, semi = boundary_l2_norm(f), boundary_h1_seminorm(f)
-    h1 = np.hypot(l2, semi) if f.conventions.h12_form == "geometric_full" else semi
-    scale = power_scale(np.array([l2, h1]))  # exact: the product neither overflows nor underflows
-    return float(np.sqrt((l2 / scale) * (h1 / scale)) * scale)
-
-
-def parse_norm(name: str):
-    """Map a norm name (``fem.norms.names``) to a function of an ``ErrorField``; raises ``UnknownNormError``
-    (also for a ``_true`` name: those are evaluated by ``fem.norms.true``)."""
-    spec = parse_norm_name(name)
+def parse_norm(name: str | NormName) -> Callable[[ErrorField], float]:
+    """Map a norm name (``fem.norms.names``) to a function of an ``ErrorField`` (its definition
+    under the field's conventions); raises ``UnknownNormError`` (also for a ``_true`` name: those
+    are evaluated by ``fem.norms.true``)."""
+    spec = norm_name(name)
     if spec.true:
-        raise UnknownNormError(f"{name!r} is not a function of an error field: evaluate it with fem.norms.true")
-    if spec.family == "H12":
-        return h12_interpolation_norm
-    if spec.family == "H1":
-        return h1_norm
-    if spec.family == "L2boundary":
-        return boundary_l2_norm
-    if spec.is_max:
-        return (lambda f: linf_norm(f, spec.part)) if spec.family == "L" else w1inf_norm
-    p = spec.p
-    return (lambda f: lp_norm(f, p, spec.part)) if spec.family == "L" else (lambda f: w1p_norm(f, p))
+        raise UnknownNormError(f"{spec.name!r} is not a function of an error field: evaluate it with fem.norms.true")
+    return lambda f: field_norm(f, define(spec, f.conventions))
 
 
-def compute_norms(field: ErrorField, names: list[str]) -> dict[str, float]:
+def compute_norms(field: ErrorField, names: Sequence[str | NormName]) -> dict[str, float]:
     """The requested norms of one error field, by name."""
-    funcs = {name: parse_norm(name) for name in names}  # validate all names first
-    values = {name: fn(field) for name, fn in funcs.items()}
+    return _compute(field, _definitions(names, field.conventions))
+
+
+def _compute(field: ErrorField, norms: dict[str, NormDefinition]) -> dict[str, float]:
+    values = {name: field_norm(field, norm) for name, norm in norms.items()}
     field.powers.enter((), 1.0)  # the shared powers go with the last norm
     return values
 
@@ -419,19 +426,18 @@ def compute_norms(field: ErrorField, names: list[str]) -> dict[str, float]:
 CHUNK_ELEMENTS = 1 << 16  # triangles per evaluation chunk: its error field and shared powers take ~0.25 GiB
 
 
-def _reduction(name: str) -> tuple[str, float]:
+def _reduction(norm: NormDefinition) -> tuple[str, float]:
     """How a norm combines over element chunks: ("sum", p) of ‖·‖ᵖ, ("max", 1) or ("boundary", 1)."""
-    spec = parse_norm_name(name)
-    if spec.on_boundary:
+    if norm.combination == BOUNDARY:
         return "boundary", 1.0
-    return ("max", 1.0) if spec.is_max else ("sum", float(spec.p))
+    return ("max", 1.0) if norm.combination == MAX else ("sum", float(norm.p))
 
 
 def evaluate_norms(
     problem: Problem,
     mesh: MeshTri,
     u_h: np.ndarray,
-    names: list[str],
+    names: Sequence[str | NormName],
     conventions: Conventions | None = None,
     chunk: int = CHUNK_ELEMENTS,
 ) -> dict[str, float]:
@@ -439,30 +445,24 @@ def evaluate_norms(
     (bounded memory).  All names share the evaluations of one chunk: ``e`` and ``∇e`` at the points
     of each rule are computed once for all the norms that need them, and each value is the one the
     name alone gives, bit for bit.  A ``_true`` name raises ``UnknownNormError``: those are
-    evaluated by ``fem.norms.true`` (``evaluate_named_norms`` takes both kinds)."""
-    true = [name for name in names if parse_norm_name(name).true]
-    if true:
-        raise UnknownNormError(
-            f"{true}: a _true norm is evaluated to a stated accuracy by fem.norms.true "
-            "(true_norm, or evaluate_named_norms for a mixed list), not under the conventions"
-        )
-    reductions = {name: _reduction(name) for name in names}
-    cell = [n for n, (kind, _) in reductions.items() if kind != "boundary"]
-    boundary = [n for n, (kind, _) in reductions.items() if kind == "boundary"]
+    evaluated by ``fem.norms.true`` (``fem.norms.evaluate.evaluate_named_norms`` takes both kinds)."""
+    conv = conventions or Conventions()
+    norms = _definitions(names, conv)
+    reductions = {name: _reduction(norm) for name, norm in norms.items()}
+    cell = {n: norms[n] for n, (kind, _) in reductions.items() if kind != "boundary"}
+    boundary = {n: norms[n] for n, (kind, _) in reductions.items() if kind == "boundary"}
     out: dict[str, float] = {}
     if boundary:
-        out.update(compute_norms(error_field(problem, mesh, u_h, conventions, norms=boundary), boundary))
+        out.update(_compute(_error_field(problem, mesh, u_h, conv, {"boundary"}, None), boundary))
     acc: dict[str, list[float]] = {name: [] for name in cell}  # the value on each chunk
-    n_el = mesh.t.shape[1]
+    n_el, needed = mesh.t.shape[1], _evaluations(cell.values())
     for start in range(0, n_el if cell else 0, chunk):
-        field = error_field(
-            problem, mesh, u_h, conventions, norms=cell, elements=np.arange(start, min(n_el, start + chunk))
-        )
-        for name, value in compute_norms(field, cell).items():
+        field = _error_field(problem, mesh, u_h, conv, needed, np.arange(start, min(n_el, start + chunk)))
+        for name, value in _compute(field, cell).items():
             acc[name].append(value)
         del field  # before the next chunk's is built: one chunk's arrays at a time
     for name in cell:
         kind, p = reductions[name]
         values = np.array(acc[name])
         out[name] = float(values.max()) if kind == "max" else scaled_p_sum([values], p)
-    return {name: out[name] for name in names}
+    return {name: out[name] for name in norms}

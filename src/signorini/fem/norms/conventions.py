@@ -4,8 +4,9 @@ A norm name (``fem.norms.names``) says which norm; a ``Conventions`` says how th
 it (``fem.norms.conventional``): the triangle rule of the integrals, the point sets of the maxima, the form of
 the ``W^{1,p}`` norm and the formula of the ``H^{1/2}(∂Ω)`` estimate.  The ``W^{1,p}`` form and the
 ``H^{1/2}`` formula also define the ``<name>_true`` norms (``fem.norms.true``) and the exact norms
-of a P1 function (``fem.norms.p1``).  Kept apart from the norms so that each of those modules (and
-the workflow's config check) can import it without importing the others.
+of a P1 function (``fem.norms.p1``): what each combines is written once, in ``fem.norms.families``.
+Kept apart from the norms so that each of those modules (and the workflow's config check) can
+import it without importing the others.
 """
 
 from __future__ import annotations

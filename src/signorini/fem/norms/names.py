@@ -14,8 +14,12 @@
 A name without the suffix is evaluated with the paper's conventions (``fem.norms.conventions.Conventions``:
 fixed rules and point sets); with it, to a relative accuracy of about 1e-4 with an error estimate.
 
-``parse_norm_name`` is the only parser: the norms (``fem.norms.conventional``), the exact norms of a P1
-function (``fem.norms.p1``), the expected rates and the labels (``signorini.published``) all use it.
+``parse_norm_name`` is the only parser: the norms (``fem.norms.conventional``, ``fem.norms.true``), the
+exact norms of a P1 function (``fem.norms.p1``), the expected rates and the labels
+(``signorini.published``) all use it.  The evaluators take a name parsed or not (``norm_name``), so
+that ``fem.norms.evaluate`` parses each name once.  ``NORM_PATTERN`` is the grammar as one regular
+expression, the config schema's pattern of a norm name (tests/fem/norms/test_names.py holds them
+equal); what each family combines is ``fem.norms.families``.
 """
 
 from __future__ import annotations
@@ -24,14 +28,21 @@ import math
 import re
 from dataclasses import dataclass
 
-_PATTERN = re.compile(r"^(?P<family>L|W1)(?P<p>inf|\d+(?:\.\d+)?)(?P<part>plus|minus)?$")
+NAMED_NORMS = {"H1": 2.0, "H12": None, "L2boundary": None}  # the norms named by a word, and their exponent
 BOUNDARY_NORMS = ("H12", "L2boundary")  # norms of the trace on ∂Ω
 TRUE_SUFFIX = "_true"  # the converged evaluation of the same norm
+_NUMBER = r"[0-9]+(\.[0-9]+)?"  # an exponent p (refused below 1 by the parser)
+_PATTERN = re.compile(rf"^(?P<family>L|W1)(?P<p>inf|{_NUMBER})(?P<part>plus|minus)?$")
+# the grammar as one regular expression: the config schema's pattern of a norm name, character for character
+NORM_PATTERN = (
+    rf"^(L({_NUMBER}|inf)(plus|minus)?|W1({_NUMBER}|inf)|{'|'.join(map(re.escape, NAMED_NORMS))})"
+    rf"({TRUE_SUFFIX})?$"
+)
 # the grammar in words (what error messages say)
 GRAMMAR = (
     "a norm is L or W1 followed by an exponent p ≥ 1 (a number such as 4 or 2.5, or inf: L4, Linf, W14, "
-    "W1inf), Lp or Linf followed by plus or minus (one-sided), H1, H12 or L2boundary; each may end in "
-    f"{TRUE_SUFFIX} (converged evaluation)"
+    f"W1inf), Lp or Linf followed by plus or minus (one-sided), {', '.join(list(NAMED_NORMS)[:-1])} or "
+    f"{list(NAMED_NORMS)[-1]}; each may end in {TRUE_SUFFIX} (converged evaluation)"
 )
 
 
@@ -77,10 +88,8 @@ def parse_norm_name(name: str) -> NormName:
     name = str(name)
     true = name.endswith(TRUE_SUFFIX)
     base = name.removesuffix(TRUE_SUFFIX)
-    if base == "H1":
-        return NormName(name, "H1", 2.0, true=true)
-    if base in BOUNDARY_NORMS:
-        return NormName(name, base, None, true=true)
+    if base in NAMED_NORMS:
+        return NormName(name, base, NAMED_NORMS[base], true=true)
     m = _PATTERN.match(base)
     if m is None or (m["family"] == "W1" and m["part"]):
         raise UnknownNormError(f"unknown norm {name!r}; {GRAMMAR}")
@@ -88,6 +97,12 @@ def parse_norm_name(name: str) -> NormName:
     if p < 1.0:
         raise UnknownNormError(f"norm {name!r}: need p ≥ 1")
     return NormName(name, m["family"], p, m["part"] or "", true=true)
+
+
+def norm_name(name: str | NormName) -> NormName:
+    """``name`` parsed (``parse_norm_name``), or as it is when already parsed: the evaluators take
+    either, so that a name is parsed once however many layers it passes."""
+    return name if isinstance(name, NormName) else parse_norm_name(name)
 
 
 def canonical_norm_name(name: str) -> str:

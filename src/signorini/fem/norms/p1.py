@@ -2,7 +2,8 @@
 
 For a piecewise linear ``v`` the paper's norms need no quadrature error: ``∫_T v^p`` for even
 integer ``p`` is a complete homogeneous polynomial of the vertex values, ``∇v`` is constant per
-triangle, maxima are attained at vertices, and ``v`` is linear along every boundary edge.
+triangle, maxima are attained at vertices, and ``v`` is linear along every boundary edge.  What
+a norm combines is its definition (``fem.norms.families``); here each part is integrated exactly.
 """
 
 from __future__ import annotations
@@ -14,7 +15,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from signorini.fem.norms.conventions import Conventions
-from signorini.fem.norms.names import NormName, parse_norm_name
+from signorini.fem.norms.families import BOUNDARY, GRADIENT_PARTS, MAX, SQUARES, NormDefinition, define, magnitude
+from signorini.fem.norms.names import NormName, norm_name
 
 if TYPE_CHECKING:
     from collections.abc import Sequence
@@ -82,11 +84,25 @@ class _P1Data:
         """∫_Ω |v|^q."""
         return _triangle_power_integrals(self.w0, self.w1, self.w2, self.area, q)
 
-    def gradient_power(self, q: float, form: str) -> float:
-        """∫_Ω of the gradient part of the W^{1,q} integrand in the form ``form``."""
-        if form == "components":
-            return float(np.sum(self.area * (np.abs(self.g1) ** q + np.abs(self.g2) ** q)))
-        return float(np.sum(self.area * np.hypot(self.g1, self.g2) ** q))
+    def integral(self, parts: tuple[str, ...], q: float) -> float:
+        """``Σ_parts ∫_Ω |part|^q``: ``∫ |v|^q`` for the part ``e``, then the parts of ``∇v`` (constant
+        per triangle) summed per triangle and integrated as one term."""
+        terms = [self.power(q) for name in parts if name == "e"]
+        gradient = None
+        for name in parts:
+            if name in GRADIENT_PARTS:
+                term = magnitude(name, None, (self.g1, self.g2)) ** q
+                gradient = term if gradient is None else gradient + term
+        if gradient is not None:
+            terms.append(float(np.sum(self.area * gradient)))
+        total = terms[0]
+        for term in terms[1:]:
+            total = total + term
+        return total
+
+    def maximum(self, name: str) -> float:
+        """``max |part|``: at a vertex (1 for ``e``: the function is normalised) or on a triangle."""
+        return 1.0 if name == "e" else float(magnitude(name, None, (self.g1, self.g2)).max())
 
     def boundary(self) -> tuple[float, float]:
         """‖v‖_{L²(∂Ω)} (exact: ∫_e v² = |e| (a² + ab + b²)/3) and |v|_{H¹(∂Ω)} (∂_t v constant per edge)."""
@@ -98,32 +114,34 @@ class _P1Data:
         return l2, semi
 
 
-def _norm_of_normalised(f: _P1Data, spec: NormName, conv: Conventions) -> float:
+def _root_sum_of_squares(values: list[float]) -> float:
+    """``(Σ values²)^{1/2}`` (``hypot``) of norms; one norm as it is."""
+    return values[0] if len(values) == 1 else math.hypot(*values)
+
+
+def _geometric_mean(values: list[float]) -> float:
+    """``(Π values)^{1/n}`` of norms of the normalised function (no under- or overflow)."""
+    if len(values) == 1:
+        return values[0]
+    return math.sqrt(values[0] * values[1]) if len(values) == 2 else math.prod(values) ** (1.0 / len(values))
+
+
+def _norm_of_normalised(f: _P1Data, norm: NormDefinition) -> float:
     """One norm of the normalised function (max |v| = 1 at the vertices)."""
-    form = conv.w1p_form
-    if spec.family == "H1":
-        return math.sqrt(f.power(2) + f.gradient_power(2, "components"))
-    if spec.on_boundary:
+    if norm.combination == BOUNDARY:
         l2, semi = f.boundary()
-        if spec.family == "L2boundary":
-            return l2
-        h1 = math.hypot(l2, semi) if conv.h12_form == "geometric_full" else semi
-        return math.sqrt(l2 * h1)
-    if spec.part:
-        raise ValueError(f"p1_norms: norm {spec.name!r} is not supported (plus/minus parts)")
-    if spec.family == "L":
-        return 1.0 if spec.is_max else f.power(spec.p) ** (1.0 / spec.p)
-    if spec.is_max:
-        if form == "components":
-            return max(1.0, float(np.abs(f.g1).max()), float(np.abs(f.g2).max()))
-        grad = float(np.hypot(f.g1, f.g2).max())
-        return grad if form == "seminorm" else max(1.0, grad)
-    value = f.power(spec.p) if form != "seminorm" else 0.0
-    return (value + f.gradient_power(spec.p, form)) ** (1.0 / spec.p)
+        norms = {"e": l2, "dt": semi}
+        return _geometric_mean([_root_sum_of_squares([norms[name] for name in factor]) for factor in norm.factors])
+    if norm.one_sided:
+        raise ValueError(f"p1_norms: norm {norm.name.name!r} is not supported (plus/minus parts)")
+    if norm.combination == MAX:
+        return max(f.maximum(name) for name in norm.parts)
+    total = f.integral(norm.parts, norm.p)
+    return math.sqrt(total) if norm.combination == SQUARES else total ** (1.0 / norm.p)
 
 
 def p1_norms(
-    mesh: MeshTri, v: np.ndarray, names: Sequence[str], conventions: Conventions | None = None
+    mesh: MeshTri, v: np.ndarray, names: Sequence[str | NormName], conventions: Conventions | None = None
 ) -> dict[str, float]:
     """The named norms of the P1 function with nodal values ``v`` (an algebraic error).
 
@@ -135,10 +153,10 @@ def p1_norms(
     parts are not supported.
     """
     conv = conventions or Conventions()
-    specs = [parse_norm_name(name) for name in names]  # unknown names raise UnknownNormError
+    specs = [norm_name(name) for name in names]  # unknown names raise UnknownNormError
     v = np.asarray(v, dtype=float)
     scale = float(np.abs(v).max(initial=0.0))
     if scale == 0.0 or not np.isfinite(scale):
         return {spec.name: 0.0 if scale == 0.0 else math.nan for spec in specs}
     data = _P1Data.of(mesh, v / scale)  # normalised: no under-/overflow in high powers
-    return {spec.name: scale * float(_norm_of_normalised(data, spec, conv)) for spec in specs}
+    return {spec.name: scale * float(_norm_of_normalised(data, define(spec, conv))) for spec in specs}

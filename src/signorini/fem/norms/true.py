@@ -40,8 +40,10 @@ relative accuracy (``RTOL``) instead of with the paper's fixed rules and point s
 - **Boundary norms** (``H12``, ``L2boundary``): the split and graded boundary rule of
   ``fem.boundary`` with 8, 16, 32, … points per piece, until two levels agree to ``rtol``.
 
-The ``W^{1,p}`` form and the ``H^{1/2}`` formula are those of the ``Conventions`` (they define
-the norm); the triangle rule and the point sets do not enter.  ``TrueNorm.levels`` records what
+What a norm combines is its definition (``fem.norms.families``): the parts, and for the ``W^{1,p}``
+form and the ``H^{1/2}`` formula the ``Conventions`` (they define the norm); the triangle rule and
+the point sets do not enter.  Each part enters the integrals as its squared magnitude raised to
+``p/2`` (``integer_power``), the maxima as its magnitude.  ``TrueNorm.levels`` records what
 each level did (how many triangles it evaluated at which rule, or sampled, settled and kept).
 """
 
@@ -54,17 +56,10 @@ import numpy as np
 
 from signorini.fem.boundary import singular_points
 from signorini.fem.derivatives import derivative_bounds, u_and_grad_u
-from signorini.fem.norms.conventional import (
-    ErrorField,
-    boundary_error,
-    boundary_l2_norm,
-    evaluate_norms,
-    h12_interpolation_norm,
-    integer_power,
-    power_scale,
-)
+from signorini.fem.norms.conventional import ErrorField, boundary_error, boundary_norm, integer_power, power_scale
 from signorini.fem.norms.conventions import Conventions
-from signorini.fem.norms.names import parse_norm_name
+from signorini.fem.norms.families import BOUNDARY, MAX, VALUE_PARTS, NormDefinition, define, magnitude, part
+from signorini.fem.norms.names import NormName, norm_name
 from signorini.fem.quadrature import gauss_legendre_01, stroud_conical
 
 if TYPE_CHECKING:
@@ -158,21 +153,27 @@ def _error_scale(problem, mesh: MeshTri, u_h: np.ndarray, gradient: bool) -> flo
     return max(scales, default=1.0)
 
 
-def _integrand(spec, form: str):
-    """``(e, ∇e) ↦`` the integrand whose integral is the norm to the power p; needs ∇e?"""
-    q = spec.p / 2.0
-    if spec.family == "H1":
-        return (lambda e, de: e * e + de[0] * de[0] + de[1] * de[1]), True
-    if spec.family == "L":
-        g = {"": lambda e: e, "plus": lambda e: np.maximum(e, 0.0), "minus": lambda e: np.maximum(-e, 0.0)}[spec.part]
-        return (lambda e, de: integer_power(g(e) ** 2, q)), False
-    if form == "components":
-        return (
-            lambda e, de: integer_power(e * e, q) + integer_power(de[0] * de[0], q) + integer_power(de[1] * de[1], q)
-        ), True
-    if form == "gradient":
-        return (lambda e, de: integer_power(e * e, q) + integer_power(de[0] * de[0] + de[1] * de[1], q)), True
-    return (lambda e, de: integer_power(de[0] * de[0] + de[1] * de[1], q)), True
+def _squared(name: str, e: np.ndarray, de: np.ndarray | None) -> np.ndarray:
+    """The squared magnitude of the part ``name``: ``x · x``, and ``∂₁e² + ∂₂e²`` for ``|∇e|``."""
+    if name == "grad":
+        return de[0] * de[0] + de[1] * de[1]
+    x = part(name, e, de)
+    return x * x
+
+
+def _integrand(norm: NormDefinition):
+    """``(e, ∇e) ↦`` the integrand whose integral is the norm to the power p (the sum over the
+    parts of their squared magnitudes to the power p/2); needs ∇e?"""
+    q, parts = norm.p / 2.0, norm.parts
+
+    def integrand(e: np.ndarray, de: np.ndarray | None) -> np.ndarray:
+        total = None
+        for name in parts:
+            term = integer_power(_squared(name, e, de), q)
+            total = term if total is None else total + term
+        return total
+
+    return integrand, norm.needs_gradient
 
 
 def _complete_homogeneous(a: np.ndarray, p: int) -> np.ndarray:
@@ -187,7 +188,7 @@ def _complete_homogeneous(a: np.ndarray, p: int) -> np.ndarray:
     return h[p]
 
 
-def _affine_rule(spec, form: str, integrand, scale: float):
+def _affine_rule(norm: NormDefinition, integrand, scale: float):
     """The exact integral over the triangles where u (so e) is affine, or None when the integrand is
     not a polynomial there (a one-sided part, an exponent that is not an even integer).  With
     ``aᵢ = e(vᵢ)``, ``(Σ λᵢ aᵢ)^p`` expanded by the multinomial theorem and
@@ -195,9 +196,9 @@ def _affine_rule(spec, form: str, integrand, scale: float):
     ``∫_T e^p = 2|T| h_p(a₀, a₁, a₂) / ((p + 1)(p + 2))``; ``∇e`` is constant on T.  Exact up to
     rounding: the terms of h_p may have both signs, and Hunter's inequality
     ``h_{2k}(a) ≥ |a|^{2k} / (2^k k!)`` bounds the cancellation."""
-    if spec.part or not float(spec.p / 2.0).is_integer():
+    if norm.one_sided or not float(norm.p / 2.0).is_integer():
         return None
-    p, has_value = int(spec.p), not (spec.family == "W1" and form == "seminorm")
+    p, has_value = int(norm.p), "e" in norm.parts
 
     def exact(problem, aff: _Affine) -> np.ndarray:
         e = (problem.u(aff.v) - (aff.u0 + np.einsum("dk,dik->ik", aff.grad, aff.v - aff.v[:, :1]))) / scale
@@ -206,7 +207,7 @@ def _affine_rule(spec, form: str, integrand, scale: float):
         )
         area = 0.5 * np.abs(jac)
         value = 2.0 * area * _complete_homogeneous(e, p) / ((p + 1) * (p + 2)) if has_value else 0.0
-        if spec.family == "L":
+        if not norm.needs_gradient:
             return value
         centroid = aff.v.mean(axis=1)[:, :, None]
         de = (problem.grad_u(centroid)[:, :, 0] - aff.grad) / scale
@@ -412,18 +413,18 @@ def _integral_level(
     }
 
 
-def _integral_norm(problem, mesh, u_h, spec, conv: Conventions, rtol: float) -> TrueNorm:
+def _integral_norm(problem, mesh, u_h, norm: NormDefinition, rtol: float) -> TrueNorm:
     """Every element at the first two rules (exactly where u is affine), then rounds of moving the
     elements of the largest differences to their next rule until ``E`` is within the tolerance of
     the integral that makes the norm's error at most ``rtol`` (module docstring)."""
-    plain, gradient = _integrand(spec, conv.w1p_form)
+    plain, gradient = _integrand(norm)
     scale = _error_scale(problem, mesh, u_h, gradient)  # a power of two: e / scale is exact
 
     def integrand(e: np.ndarray, de: np.ndarray | None) -> np.ndarray:  # (norm / scale)^p, in range
         return plain(e / scale, None if de is None else de / scale)
 
-    near, n_el, p = _NearField.of(problem, mesh, u_h), mesh.t.shape[1], spec.p
-    exact = None if derivative_bounds(problem) is None else _affine_rule(spec, conv.w1p_form, plain, scale)
+    near, n_el, p = _NearField.of(problem, mesh, u_h), mesh.t.shape[1], norm.p
+    exact = None if derivative_bounds(problem) is None else _affine_rule(norm, plain, scale)
     value, diff, lower = np.empty(n_el), np.empty(n_el), 0.0
     for block in range(0, n_el, 64 * CHUNK):  # blocks bound the memory of the two rules' values
         el = np.arange(block, min(n_el, block + 64 * CHUNK))
@@ -445,7 +446,7 @@ def _integral_norm(problem, mesh, u_h, spec, conv: Conventions, rtol: float) -> 
             diff[el], value[el], rule[el] = np.abs(new - value[el]), new, k + 1
         levels.append(_integral_level(level, float(value.sum()), float(diff.sum()), p, scale, rule, near, pick.size))
     last = levels[-1]
-    return TrueNorm(spec.name, last["value"], last["error_estimate"], rtol, _within(last, rtol), levels)
+    return TrueNorm(norm.name.name, last["value"], last["error_estimate"], rtol, _within(last, rtol), levels)
 
 
 def _within(level: dict, rtol: float) -> bool:
@@ -463,64 +464,35 @@ def _result(name: str, levels: list[dict], rtol: float) -> TrueNorm:
 
 
 def true_norm(
-    problem, mesh: MeshTri, u_h: np.ndarray, name: str, conventions: Conventions | None = None, rtol: float = RTOL
-) -> TrueNorm:
-    """The norm ``name`` (with or without the ``_true`` suffix) of ``u − u_h`` to relative accuracy ``rtol``."""
-    conv = conventions or Conventions()
-    spec = parse_norm_name(name)
-    u_h = np.asarray(u_h, dtype=float)
-    if spec.on_boundary:
-        return _boundary_norm(problem, mesh, u_h, spec, conv, rtol)
-    if spec.is_max:
-        if _bounded(problem):
-            return _bounded_max_norm(problem, mesh, u_h, spec, conv, rtol)
-        return _sampled_max_norm(problem, mesh, u_h, spec, conv, rtol)
-    return _integral_norm(problem, mesh, u_h, spec, conv, rtol)
-
-
-def evaluate_named_norms(
     problem,
     mesh: MeshTri,
     u_h: np.ndarray,
-    names: list[str],
+    name: str | NormName,
     conventions: Conventions | None = None,
-    details: bool = False,
-) -> dict[str, float] | dict[str, float | TrueNorm]:
-    """Every named norm of ``u − u_h``, the one dispatcher between the two kinds: the names under
-    the conventions in one pass of ``fem.norms.conventional.evaluate_norms`` (each chunk's error field shared
-    by all of them; each value the one the name alone gives, bit for bit), and every
-    ``<name>_true`` by ``true_norm``.  The values as floats; with ``details``, a ``_true`` name
-    maps to its ``TrueNorm`` (value, error estimate, levels)."""
-    specs = {name: parse_norm_name(name) for name in names}  # unknown names fail before any work
-    plain = [name for name in names if not specs[name].true]
-    out: dict = dict(evaluate_norms(problem, mesh, u_h, plain, conventions)) if plain else {}
-    for name in names:
-        if specs[name].true:
-            result = true_norm(problem, mesh, u_h, name, conventions)
-            out[name] = result if details else result.value
-    return {name: out[name] for name in names}
+    rtol: float = RTOL,
+) -> TrueNorm:
+    """The norm ``name`` (with or without the ``_true`` suffix) of ``u − u_h`` to relative accuracy ``rtol``."""
+    norm = define(norm_name(name), conventions)
+    u_h = np.asarray(u_h, dtype=float)
+    if norm.combination == BOUNDARY:
+        return _boundary_norm(problem, mesh, u_h, norm, conventions or Conventions(), rtol)
+    if norm.combination == MAX:
+        if _bounded(problem):
+            return _bounded_max_norm(problem, mesh, u_h, norm, rtol)
+        return _sampled_max_norm(problem, mesh, u_h, norm, rtol)
+    return _integral_norm(problem, mesh, u_h, norm, rtol)
 
 
 # --- maxima -------------------------------------------------------------------------------
 
 
-def _max_functions(spec, form: str):
-    """The functions of ``(e, ∇e)`` whose largest value over Ω is the norm, the kind of each
-    (``"value"``: a convex 1-Lipschitz function of e; ``"gradient"``: of ∇e), and whether ∇e is needed."""
-    if spec.family == "L":
-        g = {"": np.abs, "plus": lambda e: np.maximum(e, 0.0), "minus": lambda e: np.maximum(-e, 0.0)}[spec.part]
-        return [lambda e, de: g(e)], ["value"], False
-    grad = lambda e, de: np.hypot(de[0], de[1])  # noqa: E731
-    value = lambda e, de: np.abs(e)  # noqa: E731
-    if form == "components":
-        return (
-            [value, lambda e, de: np.abs(de[0]), lambda e, de: np.abs(de[1])],
-            ["value", "gradient", "gradient"],
-            True,
-        )
-    if form == "gradient":
-        return [value, grad], ["value", "gradient"], True
-    return [grad], ["gradient"], True
+def _max_functions(norm: NormDefinition):
+    """The functions of ``(e, ∇e)`` whose largest value over Ω is the norm (the magnitudes of its
+    parts), the kind of each (``"value"``: a convex 1-Lipschitz function of e; ``"gradient"``: of
+    ∇e), and whether ∇e is needed."""
+    funcs = [lambda e, de, name=name: magnitude(name, e, de) for name in norm.parts]
+    kinds = ["value" if name in VALUE_PARTS else "gradient" for name in norm.parts]
+    return funcs, kinds, norm.needs_gradient
 
 
 def _bounded(problem) -> bool:
@@ -636,14 +608,14 @@ def _max_level(level: int, sampled: int, active: np.ndarray, settled: tuple[int,
     }
 
 
-def _bounded_max_norm(problem, mesh, u_h, spec, conv: Conventions, rtol: float) -> TrueNorm:
+def _bounded_max_norm(problem, mesh, u_h, norm: NormDefinition, rtol: float) -> TrueNorm:
     """The branch and bound (module docstring): level 0 samples every element on its lattice,
     each further level quadrisects the pieces kept and samples the children.  A piece is dropped
     when its upper bound is below the largest sample so far (it cannot hold the maximum), settled
     when its bound is within ``rtol`` of it (its bound enters the upper bound, the piece is not
     refined: the largest sample only grows), and kept otherwise; the levels stop when none is kept.
     The value is the largest sample, raised by a local maximisation from it (``_Best.polished``)."""
-    funcs, kinds, gradient = _max_functions(spec, conv.w1p_form)
+    funcs, kinds, gradient = _max_functions(norm)
     n_el, best = mesh.t.shape[1], _Best()
     bound = np.empty(n_el)
     for el in _chunks(n_el):
@@ -671,7 +643,7 @@ def _bounded_max_norm(problem, mesh, u_h, spec, conv: Conventions, rtol: float) 
     upper, value = levels[-1]["upper"], best.polished(problem, mesh, u_h, funcs, gradient)
     levels.append({"level": "local maximum", "value": value, "upper": upper})
     estimate = max(upper - value, 0.0)
-    return TrueNorm(spec.name, value, estimate, rtol, estimate <= rtol * value, levels)
+    return TrueNorm(norm.name.name, value, estimate, rtol, estimate <= rtol * value, levels)
 
 
 def _lattice(m: int) -> np.ndarray:
@@ -741,10 +713,10 @@ def _local_max(problem, aff: _Affine, f, gradient: bool, start: np.ndarray) -> f
     return max(-float(res.fun), -neg(st0))
 
 
-def _sampled_max_norm(problem, mesh, u_h, spec, conv: Conventions, rtol: float) -> TrueNorm:
+def _sampled_max_norm(problem, mesh, u_h, norm: NormDefinition, rtol: float) -> TrueNorm:
     """Without bounds of the derivatives: lattices of every triangle and local maximisation on the
     candidates (module docstring), until two levels agree to ``rtol``."""
-    funcs, _, gradient = _max_functions(spec, conv.w1p_form)
+    funcs, _, gradient = _max_functions(norm)
     levels: list[dict] = []
     for m in MAX_LEVELS:
         best, where = _sample_maxima(problem, mesh, u_h, funcs, gradient, m)
@@ -758,19 +730,19 @@ def _sampled_max_norm(problem, mesh, u_h, spec, conv: Conventions, rtol: float) 
         levels.append({"level": m, "value": value, "candidates": int(len(pairs))})
         if _settled(levels, rtol):
             break
-    return _result(spec.name, levels, rtol)
+    return _result(norm.name.name, levels, rtol)
 
 
 # --- boundary norms -----------------------------------------------------------------------
 
 
-def _boundary_norm(problem, mesh, u_h, spec, conv: Conventions, rtol: float) -> TrueNorm:
+def _boundary_norm(problem, mesh, u_h, norm: NormDefinition, conv: Conventions, rtol: float) -> TrueNorm:
+    """The paper's formula (``conventional.boundary_norm``) at 8, 16, 32, … points per boundary piece."""
     levels: list[dict] = []
     for n in BOUNDARY_LEVELS:
         eb, dteb, ds = boundary_error(problem, mesh, u_h, n)
-        trace = ErrorField(None, None, None, None, None, None, eb, dteb, ds, conv)  # the paper's formulas
-        value = boundary_l2_norm(trace) if spec.family == "L2boundary" else h12_interpolation_norm(trace)
-        levels.append({"level": n, "value": value})
+        trace = ErrorField(None, None, None, None, None, None, eb, dteb, ds, conv)
+        levels.append({"level": n, "value": boundary_norm(trace, norm)})
         if _settled(levels, rtol):
             break
-    return _result(spec.name, levels, rtol)
+    return _result(norm.name.name, levels, rtol)

@@ -33,6 +33,7 @@ import numpy as np
 from signorini.fem.derivatives import u_and_grad_u
 from signorini.fem.norms.conventional import p1_at_points
 from signorini.fem.norms.conventions import Conventions
+from signorini.fem.norms.families import define, magnitude
 from signorini.plotting import new_figure, save, styled
 
 if TYPE_CHECKING:  # scikit-fem and matplotlib are imported where they are used
@@ -57,19 +58,18 @@ POINT_MARKERS = {"vertex": ("o", 9), "edge midpoint": ("s", 7), "quadrature poin
 Part = tuple[str, Callable[[np.ndarray, np.ndarray], np.ndarray]]
 
 
+PART_LABELS = {"e": "|e|", "d1": "|∂₁e|", "d2": "|∂₂e|", "grad": "|∇e|"}  # the parts of the maxima, named
+
+
 def max_parts(norm: str, form: str) -> list[Part]:
     """The functions of ``(e, ∇e)`` whose largest value the norm ``norm`` (``Linf`` or ``W1inf``) is,
-    named: ``|e|``; for ``W^{1,∞}`` in the form ``form`` (``fem.norms.conventional.w1inf_norm``)
-    ``|e|``, ``|∂₁e|``, ``|∂₂e|`` (components), ``|e|``, ``|∇e|`` (gradient) or ``|∇e|`` (seminorm)."""
-    value: Part = ("|e|", lambda e, de: np.abs(e))
-    grad: Part = ("|∇e|", lambda e, de: np.hypot(de[0], de[1]))
-    if norm == "Linf":
-        return [value]
-    if norm != "W1inf":
+    named: the magnitudes of the norm's parts (``fem.norms.families``): ``|e|``; for ``W^{1,∞}`` in
+    the form ``form`` ``|e|``, ``|∂₁e|``, ``|∂₂e|`` (components), ``|e|``, ``|∇e|`` (gradient) or
+    ``|∇e|`` (seminorm)."""
+    if norm not in MAX_NORMS:
         raise ValueError(f"{norm!r}: the point sets are those of Linf and W1inf")
-    if form == "components":
-        return [value, ("|∂₁e|", lambda e, de: np.abs(de[0])), ("|∂₂e|", lambda e, de: np.abs(de[1]))]
-    return [value, grad] if form == "gradient" else [grad]
+    parts = define(norm, Conventions(w1p_form=form)).parts
+    return [(PART_LABELS[name], lambda e, de, name=name: magnitude(name, e, de)) for name in parts]
 
 
 def max_function(parts: Sequence[Part], e: np.ndarray, de: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -195,7 +195,7 @@ def max_norm(problem: Problem, mesh: MeshTri, u_h: np.ndarray, conventions: Conv
     """``MaxNorm`` of ``Linf`` or ``W1inf`` under the conventions."""
     from signorini.fem.norms.true import true_norm
 
-    which = conventions.linf_points if name == "Linf" else conventions.w1inf_points
+    which = getattr(conventions, define(name, conventions).points)  # linf_points or w1inf_points
     parts = tuple(max_parts(name, conventions.w1p_form))
     pts = point_set(problem, mesh, u_h, conventions, which)
     true = true_norm(problem, mesh, u_h, f"{name}_true", conventions)

@@ -9,13 +9,13 @@ import logging
 import math
 import os
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from signorini.fem.norms.conventions import Conventions
-from signorini.fem.norms.names import parse_norm_name
-from signorini.fem.norms.true import evaluate_named_norms
+from signorini.fem.norms.evaluate import evaluate_named_norms
+from signorini.fem.norms.names import NormName, norm_name, parse_norm_name
 from signorini.pipeline.artifacts import save_json
 from signorini.studies.scene.store import SceneMesh
 
@@ -30,22 +30,23 @@ TIMINGS_NOTE = (
 )
 
 
-def _evaluate(at: SceneMesh, mesh, u_h, names: list[str], conv: Conventions) -> dict[str, tuple]:
-    """{name: (value, accuracy or None, seconds, names sharing the evaluation)}: the names under
-    the conventions in one call of the dispatcher (one error field), each ``_true`` name alone."""
-    plain = [name for name in names if not parse_norm_name(name).true]
-    groups = ([plain] if plain else []) + [[name] for name in names if name not in plain]
+def _evaluate(at: SceneMesh, mesh, u_h, norms: list[NormName], conv: Conventions) -> dict[str, tuple]:
+    """{name: (value, accuracy or None, seconds, names sharing the evaluation)}: the norms under
+    the conventions in one call of the dispatcher (one error field), each ``_true`` norm alone."""
+    plain = [spec for spec in norms if not spec.true]
+    groups = ([plain] if plain else []) + [[spec] for spec in norms if spec.true]
     out = {}
     for group in groups:
+        names = [spec.name for spec in group]
         t1 = time.perf_counter()
         results = evaluate_named_norms(at.problem, mesh, u_h, group, conv, details=True)
         seconds = time.perf_counter() - t1
         for name, result in results.items():
             if isinstance(result, float):
-                out[name] = (result, None, seconds, group)
+                out[name] = (result, None, seconds, names)
             else:
                 accuracy = {k: v for k, v in result.as_dict().items() if k not in ("name", "value")}
-                out[name] = (result.value, accuracy, seconds, group)
+                out[name] = (result.value, accuracy, seconds, names)
     return out
 
 # The uncertainty of a value is this multiple of the same norm of the algebraic error δ: δ is the
@@ -58,22 +59,22 @@ UNCERTAINTY_NOTE = (
 )
 
 
-def uncertainty_norm(norm: str) -> str:
+def uncertainty_norm(norm: str | NormName) -> str:
     """The norm whose value on ``δ = u_h − u_h*`` bounds the change of ``norm`` of ``u − u_h``: the
     norm itself under the paper's conventions (a ``_true`` norm's rule-based twin); for a one-sided
     ``Lpplus``/``Lpminus`` the two-sided ``Lp`` (``‖(e + δ)⁺‖ ≤ ‖e⁺‖ + ‖δ‖``)."""
-    spec = parse_norm_name(norm)
+    spec = norm_name(norm)
     return spec.base.removesuffix(spec.part) if spec.part else spec.base
 
 
 def algebraic_uncertainties(
-    at: SceneMesh, mesh: MeshTri, delta: np.ndarray, norms: list[str], conv: Conventions
+    at: SceneMesh, mesh: MeshTri, delta: np.ndarray, norms: Sequence[str | NormName], conv: Conventions
 ) -> dict[str, dict]:
     """{norm: the norm of the algebraic error ``δ`` (a P1 function: the error of ``-δ`` against
     ``u ≡ 0``) that bounds how far round-off can move the value of ``norm``, and the uncertainty
     recorded}; the norms of ``δ`` are evaluated together (one error field)."""
     zero = replace(at.problem, A=0.0)  # u ≡ 0, same free point: the same boundary pieces
-    names = {norm: uncertainty_norm(norm) for norm in norms}
+    names = {norm_name(norm).name: uncertainty_norm(norm) for norm in norms}
     values = evaluate_named_norms(zero, mesh, -delta, list(dict.fromkeys(names.values())), conv)
     return {
         norm: {
@@ -95,13 +96,12 @@ def norms_stage(
 ) -> dict[str, dict]:
     """Norms of ``u - u_h`` on one mesh of a scene, each saved to its own JSON (``outputs``:
     norm name -> path) with its value and timing, on one mesh built once: the norms under the
-    conventions together (``fem.norms.true.evaluate_named_norms``: each value the one a job of that
+    conventions together (``fem.norms.evaluate.evaluate_named_norms``: each value the one a job of that
     norm alone computes, bit for bit), then each ``_true`` norm, which also saves its estimated
     quadrature error and refinement levels.  With the solve artifact's ``algebraic_error`` each
     artifact also records how far round-off in ``u_h`` can move its value (``algebraic_error``:
     ``algebraic_uncertainties``), from which the tables take their digits."""
-    for norm in outputs:
-        parse_norm_name(norm)  # fail before any work on an unknown name
+    specs = [parse_norm_name(norm) for norm in outputs]  # fail before any work on an unknown name
     conv = Conventions(**dict(conventions))
     solution = at.solution(solution_npz)
     u_h, delta = solution["u"], solution.get("algebraic_error")
@@ -110,8 +110,8 @@ def norms_stage(
     mesh_s = time.perf_counter() - t0
     shared = {"mesh_shared_by": list(outputs)} if len(outputs) > 1 else {}
     infos = {}
-    values = _evaluate(at, mesh, u_h, list(outputs), conv)
-    uncertainties = {} if delta is None else algebraic_uncertainties(at, mesh, delta, list(outputs), conv)
+    values = _evaluate(at, mesh, u_h, specs, conv)
+    uncertainties = {} if delta is None else algebraic_uncertainties(at, mesh, delta, specs, conv)
     for norm, (value, accuracy, norm_s, group) in values.items():
         if not math.isfinite(value) or value < 0.0:
             raise ValueError(
