@@ -384,14 +384,14 @@ def element_errors(problem: Problem, mesh, u_h: np.ndarray, conventions=None) ->
 
 
 def active_set_history(disc, **options):
-    """Solve ``disc`` with the active-set solver and return ``(result, history)``: one row per
+    """Solve ``disc`` by the direct route and return ``(result, history)``: one row per
     Newton step of the final solve (active nodes, changes, factorisations and low-rank correction
     columns so far, elapsed time), the solver's own ``SolveResult.history``."""
     import pandas as pd
 
     from signorini.fem.solve import solve_discrete
 
-    result = solve_discrete(disc, "active_set", **options)
+    result = solve_discrete(disc, "direct", **options)
     return result, pd.DataFrame(result.history)
 
 

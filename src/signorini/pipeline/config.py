@@ -461,7 +461,7 @@ def check_amplitude(field: str, A: float, R: float, Ns: Sequence[int], c: float 
         raise ConfigError(
             f"{field}: {A!r} is too large for conjugate gradients (the multigrid route, the theory quantities): "
             f"the energy A²·a(u₁, u₁) = {energy_of_u1(R, c):.3g}·A² (R = {R}, c = {c}) would overflow to inf; need "
-            f"A ≤ {ceiling:.4e}, or the active_set solver"
+            f"A ≤ {ceiling:.4e}, or the direct route (solver: direct)"
         )
 
 
@@ -494,7 +494,7 @@ def check_support(where: str, problem, Ns: Sequence[int]) -> None:
     raise ConfigError(f"{where}.N[0]: {what}; start the meshes at N = {need_N} (R ≥ {SUPPORT_CELLS}h)")
 
 
-def check_memory(field: str, N: int, limit_mb: int, available: str = "available", solver: str = "active_set") -> None:
+def check_memory(field: str, N: int, limit_mb: int, available: str = "available", solver: str = "direct") -> None:
     """The largest job on mesh ``N`` with solves by ``solver`` (``resources.largest_job``) fits
     into ``limit_mb``."""
     from signorini.pipeline.resources import largest_job
