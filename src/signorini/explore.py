@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from signorini.fem.mesh import DEFAULT_DIAGONAL
-from signorini.fem.problem import Problem
+from signorini.fem.problem import ExactProblem, Problem, make_problem
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz
 from signorini.pipeline.integrity import artifact_ok
 from signorini.pipeline.paths import PATHS, REFERENCES
@@ -166,8 +166,8 @@ class Scene:
         return self._solutions[N]
 
     @cached_property
-    def problem(self) -> Problem:
-        return Problem.from_params(self.problem_params)
+    def problem(self) -> ExactProblem:
+        return make_problem(self.problem_params)
 
     @cached_property
     def diagonal(self) -> str:
