@@ -109,7 +109,7 @@ QP_SHORTHANDS = ("clarabel", "osqp", "scs")  # the cvxpy_<QP solver> names the c
 # and 301 within the runs' spread, multigrid ahead at 351, ×1.6 at 401 and ×1.9 at 451)
 MULTIGRID_FROM_UNKNOWNS = 120_000
 
-SOLVERS = (DIRECT.name, MULTIGRID.name, AUTO, CVXPY.name)
+SOLVERS = (*ROUTES, AUTO)  # the routes by their names, and the choice between the exact ones
 # the names of the certified active-set routes (the cascade starts them)
 EXACT_SOLVERS = (
     *(name for name, route in ROUTES.items() if route.exact),
