@@ -14,7 +14,7 @@ from signorini.solvers import SOLVERS, solve
 
 def test_dispatcher_routes(cache):
     disc, exact = cache.discrete({}, 11), cache.solution({}, 11)
-    assert SOLVERS == ("direct", "multigrid", "cvxpy", "auto")
+    assert {"direct", "multigrid", "cvxpy", "auto"} <= set(SOLVERS)
     assert solve("multigrid", disc.A, disc.b, disc.boundary, max_coarse=20).solver == "multigrid"
     # the direct route's results keep the name the artifacts record: active_set
     assert solve("auto", disc.A, disc.b, disc.boundary).solver == "active_set"  # 144 unknowns: direct
