@@ -159,8 +159,8 @@ GLOSSARY_TERMS = (
     "L4plus", "L4minus", "plus", "minus", "_true", "_raw", "Conventions", "stroud4_acute1", "stroud4_acute2",
     "stroud4_right", "dunavant8", "components", "h12_boundary",
     # solvers
-    "active_set", "multigrid", "auto", "kkt_tol", "vinewtonrsls", "vinewtonssls", "ok", "inaccurate", "failed",
-    "skipped",
+    "direct", "active_set", "multigrid", "auto", "kkt_tol", "vinewtonrsls", "vinewtonssls", "ok", "inaccurate",
+    "failed", "skipped",
     # studies
     "algebraic_error", "theory_rates", "theory_extra", "cost_of_accuracy", "time_s", "wall_s", "time_ref", "ref_s",
     "load1", "spread", "cond_max_dofs",

@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from signorini.fem.mesh import DEFAULT_DIAGONAL
-from signorini.fem.problem import Problem
+from signorini.fem.problem import ExactProblem, Problem, make_problem
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz
 from signorini.pipeline.integrity import artifact_ok
 from signorini.pipeline.paths import PATHS, REFERENCES
@@ -166,8 +166,8 @@ class Scene:
         return self._solutions[N]
 
     @cached_property
-    def problem(self) -> Problem:
-        return Problem.from_params(self.problem_params)
+    def problem(self) -> ExactProblem:
+        return make_problem(self.problem_params)
 
     @cached_property
     def diagonal(self) -> str:
@@ -384,14 +384,14 @@ def element_errors(problem: Problem, mesh, u_h: np.ndarray, conventions=None) ->
 
 
 def active_set_history(disc, **options):
-    """Solve ``disc`` with the active-set solver and return ``(result, history)``: one row per
+    """Solve ``disc`` by the direct route and return ``(result, history)``: one row per
     Newton step of the final solve (active nodes, changes, factorisations and low-rank correction
     columns so far, elapsed time), the solver's own ``SolveResult.history``."""
     import pandas as pd
 
     from signorini.fem.solve import solve_discrete
 
-    result = solve_discrete(disc, "active_set", **options)
+    result = solve_discrete(disc, "direct", **options)
     return result, pd.DataFrame(result.history)
 
 

@@ -12,12 +12,13 @@ import pytest
 
 from signorini.fem.boundary import boundary_breaks, boundary_rule, singular_points
 from signorini.fem.mesh import friedrichs_keller
+from signorini.fem.problem import ProblemBase
 
 X_SINGULAR, X_BREAK = 0.35, 0.6  # on the bottom edge, inside the mesh edges [1/4, 1/2] and [1/2, 3/4]
 
 
-class RootOnTheBottomEdge:
-    """A duck-typed problem naming a singular point and a break point on the bottom edge."""
+class RootOnTheBottomEdge(ProblemBase):
+    """A problem naming a singular point and a break point on the bottom edge."""
 
     def singular_points(self):
         return np.array([[X_SINGULAR], [0.0]])
@@ -35,8 +36,8 @@ def bottom_root_integral(rule, mesh) -> float:
 
 def test_a_problem_without_points_gets_the_rule_on_whole_edges():
     mesh = friedrichs_keller(4)
-    assert singular_points(object()).shape == boundary_breaks(object()).shape == (2, 0)
-    rule = boundary_rule(mesh, object(), 5)
+    assert singular_points(ProblemBase()).shape == boundary_breaks(ProblemBase()).shape == (2, 0)
+    rule = boundary_rule(mesh, ProblemBase(), 5)
     assert rule.edge.size == 4 * 4 and rule.s.shape == (16, 5)  # one piece per boundary edge
     assert rule.ds.sum() == pytest.approx(4.0, rel=1e-14)  # the boundary's length
     assert np.all((rule.s > 0.0) & (rule.s < 1.0))

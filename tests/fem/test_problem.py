@@ -14,9 +14,20 @@ import math
 
 import numpy as np
 import pytest
+from helpers import ROOT
 from numpy.polynomial import Polynomial
 
-from signorini.fem.problem import ConstantProblem, FullContactProblem, Problem, ProblemParameterError, make_problem
+from signorini.fem.problem import (
+    DEFAULT_KIND,
+    PROBLEM_KINDS,
+    ConstantProblem,
+    ExactProblem,
+    FullContactProblem,
+    Problem,
+    ProblemBase,
+    ProblemParameterError,
+    make_problem,
+)
 
 PROBLEMS = [Problem(), Problem(x0=0.47, c=3.0), Problem(x0=0.4, R=0.3, A=2.0, c=0.0), Problem(x0=0.62, R=0.35)]
 PROBLEM_IDS = ["default", "x0=0.47,c=3", "x0=0.4,R=0.3,A=2,c=0", "x0=0.62,R=0.35"]
@@ -395,3 +406,56 @@ def test_problem_factory_and_validation():
     for params in bad:
         with pytest.raises(ProblemParameterError):
             make_problem(params)
+
+
+def test_the_factory_builds_a_scene_problem_as_the_scenes_always_did():
+    """Without ``kind`` the paper's problem, numbers as floats (``Problem.from_params``); the
+    recorded ``as_dict`` of each kind builds the same problem again."""
+    params = {"x0": 0.5, "R": 0.45, "A": 10, "c": 1}
+    problem = make_problem(params)
+    assert DEFAULT_KIND == "manufactured" and problem == Problem.from_params(params) and problem.as_dict() == {
+        "x0": 0.5, "R": 0.45, "A": 10.0, "c": 1.0
+    }
+    assert all(type(v) is float for v in problem.as_dict().values())
+    for p in (Problem(x0=0.4, R=0.3), ConstantProblem(2.0, 4.0), FullContactProblem(3.0, 0.5)):
+        assert make_problem(p.as_dict()) == p
+    with pytest.raises(ProblemParameterError, match="unknown parameter 'value'") as info:
+        make_problem({"x0": 0.5, "value": 1.0})
+    assert info.value.parameter == "value"
+    with pytest.raises(ProblemParameterError, match="unknown problem kind 'nosuch'") as info:
+        make_problem({"kind": "nosuch"})
+    assert info.value.parameter == "kind"
+
+
+def test_the_schema_lists_the_problem_kinds():
+    import yaml
+
+    schema = yaml.safe_load((ROOT / "workflow/schemas/config.schema.yaml").read_text(encoding="utf-8"))
+    assert schema["$defs"]["problem_kind"]["enum"] == list(PROBLEM_KINDS)
+
+
+@pytest.mark.parametrize("kind", sorted(PROBLEM_KINDS))
+def test_every_kind_has_the_members_of_the_protocol(kind):
+    members = {name for name in dir(ExactProblem) if not name.startswith("_")} | set(ExactProblem.__annotations__)
+    problem = PROBLEM_KINDS[kind]()
+    assert all(hasattr(problem, name) for name in members), kind
+    assert problem.kind == kind and issubclass(PROBLEM_KINDS[kind], ProblemBase)
+
+
+def test_the_base_states_no_capability_and_the_manufactured_problem_its_own(rng):
+    x = rng.uniform(0.0, 1.0, (2, 7))
+    constant, manufactured = ConstantProblem(2.0, 4.0), Problem()
+    assert constant.singular_points().shape == constant.boundary_breaks().shape == (2, 0)
+    assert constant.derivative_bounds() is None
+    assert manufactured.singular_points().shape == (2, 1) and manufactured.boundary_breaks().shape == (2, 2)
+    u, grad = constant.u_and_grad_u(x)
+    assert np.array_equal(u, constant.u(x)) and np.array_equal(grad, constant.grad_u(x))
+
+
+def test_the_vanishing_problem_keeps_the_points_and_has_u_zero(rng):
+    x = rng.uniform(0.0, 1.0, (2, 5))
+    assert Problem().vanishing() == Problem(A=0.0)
+    zero = FullContactProblem(2.0, 3.0).vanishing()
+    assert zero.c == 3.0 and not zero.u(x).any() and not zero.grad_u(x).any() and not zero.f(x).any()
+    assert zero.singular_points().shape == (2, 0)
+    assert not zero.derivative_bounds().hessian_bound(np.array([0.0]), np.array([0.1])).any()

@@ -20,6 +20,7 @@ from signorini.pipeline.config import (
     ConfigError,
     amplitude_ceiling,
     amplitude_floor,
+    apply_scene_defaults,
     check_config,
     energy_ceiling,
     load_yaml,
@@ -294,10 +295,10 @@ def test_scene_names_that_cannot_be_paths_are_refused(name, fragments):
 @pytest.mark.parametrize(
     ("path", "value", "fragments"),
     [
-        (("solver",), "gurobi", ["scenes.smoke.solver: 'gurobi' is not allowed; one of active_set,"]),
+        (("solver",), "gurobi", ["scenes.smoke.solver: 'gurobi' is not allowed; one of direct, multigrid,"]),
         (("N", 1), 201.5, ["scenes.smoke.N[1]: 201.5 is not an integer"]),
         (("N", 0), 0, ["scenes.smoke.N[0]: 0 is not allowed; the value must be ≥ 1"]),
-        (("problem", "c"), -1, ["scenes.smoke.problem.c: -1 is not allowed; the value must be ≥ 0"]),
+        (("problem", "c"), -1, ["scenes.smoke.problem.c: reaction coefficient c=-1.0 must be non-negative"]),
         (("problem", "x0"), "half", ["scenes.smoke.problem.x0: 'half' is not a number"]),
         (("nroms",), ["L4"], ["scenes.smoke: unknown field 'nroms'; allowed: N, atlas,"]),
         (("norms",), [], ["scenes.smoke.norms: needs at least 1 entry"]),
@@ -537,3 +538,18 @@ def test_a_memoised_validation_gives_the_same_config_and_never_hides_an_error(tm
     bad["scenes"]["smoke"]["N"] = [11, 21.5]
     with pytest.raises(ConfigError, match=r"scenes\.smoke\.N\[1\]"):
         cfg.validate_config(bad, SCHEMA, memo=memo)
+
+
+def test_a_scene_of_another_problem_kind_takes_only_its_own_parameters():
+    """A scene's problem of another kind than the defaults' is not merged with them; each of its
+    parameters is required and checked by its class, the field named."""
+    check_config(with_smoke(problem={"kind": "full_contact", "A": 2.0, "c": 1.0}))
+    config = shipped()
+    config["scenes"]["smoke"]["problem"] = {"kind": "constant", "value": 1.0}
+    apply_scene_defaults(config)
+    assert config["scenes"]["smoke"]["problem"] == {"kind": "constant", "value": 1.0}
+    assert refused(config) == "scenes.smoke.problem: 'c' missing (the constant problem's parameters: value, c)"
+    message = refused(with_smoke(problem={"kind": "constant", "value": 1.0, "c": 0.0}))
+    assert message.startswith("scenes.smoke.problem.c: value > 0 needs c > 0"), message
+    message = refused(with_smoke(problem={"kind": "full_contact", "A": 1.0, "c": 1.0, "R": 0.3}))
+    assert message.startswith("scenes.smoke.problem.R: full_contact problem: unknown parameter 'R'"), message

@@ -45,3 +45,17 @@ def test_targets_render_inputs_and_report_pages_name_existing_outputs():
     assert all(rule in FIGURES and set(inputs) <= set(FIGURES) for rule, inputs in RENDER_INPUTS.items())
     outputs = {path for rule in FIGURES.values() for path in rule.values()}
     assert set(REPORT_PAGES.values()) <= outputs and all(p.endswith(".md") for p in REPORT_PAGES.values())
+
+
+def test_the_report_pages_and_targets_are_stated_once_with_their_captions_and_commands():
+    """``REPORT_PAGES`` and ``TARGETS`` are views of ``REPORT_PAGE_ENTRIES`` and ``TARGET_RULES``;
+    every page's caption is a file of workflow/report/."""
+    from helpers import ROOT
+
+    from signorini.pipeline.paths import REPORT_PAGE_ENTRIES, TARGET_RULES
+
+    assert REPORT_PAGES == {page: entry.source for page, entry in REPORT_PAGE_ENTRIES.items()}
+    assert TARGETS == {name: target.rules for name, target in TARGET_RULES.items()}
+    assert all((ROOT / "workflow/report" / f"{entry.caption}.rst").is_file() for entry in REPORT_PAGE_ENTRIES.values())
+    assert TARGET_RULES["all"].command == "make all"
+    assert all(t.command == f"snakemake -c2 {name}" for name, t in TARGET_RULES.items() if name != "all")

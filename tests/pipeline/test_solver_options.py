@@ -145,3 +145,13 @@ def test_the_option_tables_match_the_installed_qp_solvers():
     with pytest.raises(TypeError):
         scs.SCS(data, {"l": 1}, not_a_setting=1)
     assert "polishing" in route_options("cvxpy_osqp")[1] and "tol" in route_options("OSQP")[1]
+
+
+def test_the_direct_route_and_its_earlier_name_accept_the_same_options():
+    """``direct`` and ``active_set`` name one route (``signorini.solvers.routes.ALIASES``)."""
+    from signorini.pipeline.solver_options import check_options, exact_routes, route_options
+
+    assert route_options("direct") == route_options("active_set")
+    assert {"direct", "active_set"} <= set(exact_routes())
+    assert check_options("x", "direct", {"max_iter": 5, "backend": "superlu"}) is None
+    assert check_options("x", "direct", {"amg": "geometric"}).startswith("x.amg: not an option of active_set_solve")

@@ -14,10 +14,13 @@ from signorini.solvers import SOLVERS, solve
 
 def test_dispatcher_routes(cache):
     disc, exact = cache.discrete({}, 11), cache.solution({}, 11)
-    assert SOLVERS == ("active_set", "multigrid", "auto", "cvxpy")
+    assert {"direct", "multigrid", "cvxpy", "auto"} <= set(SOLVERS)
     assert solve("multigrid", disc.A, disc.b, disc.boundary, max_coarse=20).solver == "multigrid"
+    # the direct route's results keep the name the artifacts record: active_set
     assert solve("auto", disc.A, disc.b, disc.boundary).solver == "active_set"  # 144 unknowns: direct
-    r1 = solve("active_set", disc.A, disc.b, disc.boundary)
+    r0 = solve("direct", disc.A, disc.b, disc.boundary)
+    r1 = solve("active_set", disc.A, disc.b, disc.boundary)  # the direct route's earlier name
+    assert r0.solver == "active_set" and np.array_equal(r0.u, r1.u)
     r2 = solve("cvxpy", disc.A, disc.b, disc.boundary, qp_solver="OSQP", tol=1e-12, warm_start=exact.u)
     r3 = solve("cvxpy_osqp", disc.A, disc.b, disc.boundary, tol=1e-12, warm_start=exact.u)
     r4 = solve_discrete(disc, "cvxpy", qp_solver="OSQP", tol=1e-12)
@@ -33,16 +36,17 @@ def test_auto_route_takes_multigrid_from_the_crossover_on(monkeypatch, caplog):
     import logging
 
     import signorini.solvers as solvers
+    from signorini.solvers import routes
 
-    monkeypatch.setattr(solvers, "MULTIGRID_FROM_UNKNOWNS", 5000)
-    assert solvers.exact_route("auto", 4999) == "active_set" and solvers.exact_route("auto", 5000) == "multigrid"
-    assert solvers.exact_route("multigrid", 10) == "multigrid"
+    monkeypatch.setattr(routes, "MULTIGRID_FROM_UNKNOWNS", 5000)
+    assert solvers.exact_route("auto", 4999) == "direct" and solvers.exact_route("auto", 5000) == "multigrid"
+    assert solvers.exact_route("multigrid", 10) == "multigrid" and solvers.exact_route("active_set", 10) == "direct"
     disc = build(Problem(), 101)
     with caplog.at_level(logging.INFO, logger="signorini.solvers"):
         result = solve_discrete(disc, "auto")
     loggers = {record.name for record in caplog.records}
     assert {"signorini.solvers.active_set", "signorini.solvers.multigrid"} <= loggers
-    direct = solve_discrete(disc, "active_set")
+    direct = solve_discrete(disc, "direct")
     assert result.solver == "multigrid" and rel_max_diff(result.u, direct.u) <= 1e-12
     np.testing.assert_array_equal(np.sort(result.active), np.sort(direct.active))
 

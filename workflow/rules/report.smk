@@ -7,23 +7,9 @@
 # report's menu and search list the page and the file's download as two rows.
 from signorini.studies import report as report_lib
 
-# page: (caption in workflow/report/, category, subcategory), as the rule that writes its source
-REPORT_PAGES = {
-    "summary": ("summary", "Findings", None),
-    "table1": ("table1", "Paper", "Tables"),
-    "table2": ("table2", "Paper", "Tables"),
-    "reproduction": ("reproduction", "Paper", "Reproduction"),
-    "table1_true": ("true_tables", "Paper", "True norms"),
-    "table2_true": ("true_tables", "Paper", "True norms"),
-    "table1_fine": ("fine_tables", "Theory", "Finer meshes"),
-    "table2_fine": ("fine_tables", "Theory", "Finer meshes"),
-    "theory": ("theory", "Theory", None),
-    "work_precision": ("work_precision", "Work precision", None),
-    "stability": ("stability", "Stability", None),
-}
-
-for _page, (_caption, _category, _subcategory) in REPORT_PAGES.items():
-    _source = paths.REPORT_PAGES[_page]
+# each page (paths.REPORT_PAGE_ENTRIES): its source, and its caption and place in the menu
+for _page, _entry in paths.REPORT_PAGE_ENTRIES.items():
+    _source, _caption, _category, _subcategory = _entry
 
     rule:
         """A Markdown output as an HTML page of the report."""

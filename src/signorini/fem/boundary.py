@@ -8,7 +8,7 @@ slowly; here every edge is split at those points, and on a piece that ends at th
 the Gauss variable is graded as ``s = τ²`` toward it, which turns ``r^{k/2}`` into a polynomial in
 ``τ`` (the rule is then exact or exponentially convergent on each piece).
 
-A problem names its points by two optional methods (absent: no split):
+A problem names its points by two of its capabilities (``fem.problem.ExactProblem``; none by default):
 ``singular_points()`` → (2, k) points where ``u`` is not smooth (split and graded) and
 ``boundary_breaks()`` → (2, k) further points on ∂Ω where ``u`` is less smooth (split only).
 """
@@ -25,19 +25,19 @@ from signorini.fem.quadrature import gauss_legendre_01
 if TYPE_CHECKING:
     from skfem import MeshTri
 
+    from signorini.fem.problem import ExactProblem
+
 ON_EDGE_TOL = 1e-12  # a point this close (relative to the edge length) lies on the edge
 
 
-def singular_points(problem) -> np.ndarray:
-    """The problem's singular points (2, k); none for a problem that names none."""
-    fn = getattr(problem, "singular_points", None)
-    return np.zeros((2, 0)) if fn is None else np.asarray(fn(), dtype=float).reshape(2, -1)
+def singular_points(problem: ExactProblem) -> np.ndarray:
+    """The problem's singular points as a float array (2, k)."""
+    return np.asarray(problem.singular_points(), dtype=float).reshape(2, -1)
 
 
-def boundary_breaks(problem) -> np.ndarray:
-    """The problem's further break points on ∂Ω (2, k); none for a problem that names none."""
-    fn = getattr(problem, "boundary_breaks", None)
-    return np.zeros((2, 0)) if fn is None else np.asarray(fn(), dtype=float).reshape(2, -1)
+def boundary_breaks(problem: ExactProblem) -> np.ndarray:
+    """The problem's further break points on ∂Ω as a float array (2, k)."""
+    return np.asarray(problem.boundary_breaks(), dtype=float).reshape(2, -1)
 
 
 @dataclass
@@ -87,7 +87,7 @@ def _pieces(cuts: list[float], graded: list[float]) -> list[tuple[float, float, 
     return out
 
 
-def boundary_rule(mesh: MeshTri, problem, n: int, split: bool = True) -> BoundaryRule:
+def boundary_rule(mesh: MeshTri, problem: ExactProblem, n: int, split: bool = True) -> BoundaryRule:
     """An ``n``-point Gauss–Legendre rule on every piece of every boundary edge (see the module);
     ``split=False``: on every whole edge (the rule before the split, kept for comparison)."""
     facets = mesh.facets[:, mesh.boundary_facets()]

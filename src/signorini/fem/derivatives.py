@@ -1,10 +1,9 @@
 """What the true norms (``fem.norms.true``) know of the derivatives of an exact solution: bounds of
 its second derivatives and the Hölder constant of its gradient, by which the true maxima exclude
-triangles, and ``u`` with ``∇u`` in one evaluation.
+triangles (``DerivativeBounds``), and ``u`` with ``∇u`` in one evaluation.
 
-A problem may state the bounds itself (methods ``hessian_bound(r_lo, r_hi)`` and
-``gradient_holder_bound(r_hi)``, ``r`` the distance to its singular point); for the manufactured
-``Problem`` they are ``ManufacturedBounds``, derived below from its closed form
+A problem states its bounds by ``derivative_bounds()`` (``fem.problem.ExactProblem``; none by
+default); for the manufactured ``Problem`` they are ``ManufacturedBounds``, derived below from its closed form
 ``u = A ψ(r) ũ(r, θ)``, ``ũ = −Im z^{3/2}``, ``z = (x₁ − x0) + i x₂``.  The cut-off ψ(r) = S(1 − r/R)
 and its derivatives on [0, R] (s = r/R):
 
@@ -18,13 +17,25 @@ and its derivatives on [0, R] (s = r/R):
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
-from signorini.fem.problem import Problem
+if TYPE_CHECKING:
+    from signorini.fem.problem import ExactProblem, Problem
 
 PSI1 = 630.0 / 256.0  # max |ψ'| R
 PSI2 = 2520.0 * (6.0 / 7.0) ** 3 / (64.0 * np.sqrt(7.0))  # max(|ψ''|, |ψ'/r|) R²
+
+
+class DerivativeBounds(Protocol):
+    """Bounds of the derivatives of ``u``, ``r`` the distance to the problem's singular point (to the
+    origin where it has none): ``hessian_bound(r_lo, r_hi)`` ≥ ‖D²u(x)‖₂ for ``r_lo ≤ r ≤ r_hi``,
+    and ``gradient_holder_bound(r_hi)`` = H with ``|∇u(x) − ∇u(y)| ≤ H |x − y|^{1/2}`` within ``r_hi``."""
+
+    def hessian_bound(self, r_lo: np.ndarray, r_hi: np.ndarray) -> np.ndarray: ...
+
+    def gradient_holder_bound(self, r_hi: np.ndarray) -> np.ndarray: ...
 
 
 @dataclass(frozen=True)
@@ -69,26 +80,13 @@ class ManufacturedBounds:
         return p.A * (1.5 + np.sqrt(2.0 * r_hi) * lipschitz)
 
 
-def derivative_bounds(problem):
-    """The bounds of the derivatives of the problem's solution: the problem itself where it states
-    them (``hessian_bound``), ``ManufacturedBounds`` for the manufactured ``Problem``, else None."""
-    if callable(getattr(problem, "hessian_bound", None)):
-        return problem
-    return ManufacturedBounds(problem) if isinstance(problem, Problem) else None
+def derivative_bounds(problem: ExactProblem) -> DerivativeBounds | None:
+    """The bounds of the derivatives of the problem's solution (``problem.derivative_bounds()``:
+    ``ManufacturedBounds`` for the manufactured ``Problem``), or None."""
+    return problem.derivative_bounds()
 
 
-def u_and_grad_u(problem, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(u(x), ∇u(x))``; for the manufactured ``Problem`` with one evaluation of its polar quantities,
-    bit for bit ``problem.u(x)`` and ``problem.grad_u(x)`` (the same operations; for ``A = 0`` zeros
-    without evaluating them, where those give zeros of either sign)."""
-    if not isinstance(problem, Problem):
-        return problem.u(x), problem.grad_u(x)
-    if problem.A == 0.0:  # u ≡ 0 (the norms of a P1 function, e.g. an algebraic error): nothing to evaluate
-        return np.zeros(np.shape(x)[1:]), np.zeros(np.shape(x))
-    inside, dx, dy, r, re, im, ut = problem._local(x)
-    value, grad = np.zeros(np.shape(x)[1:]), np.zeros(np.shape(x))
-    psi, dpr = problem.psi(r), problem.dpsi_over_r(r)
-    value[inside] = problem.A * psi * ut
-    grad[0][inside] = problem.A * (dpr * ut * dx - 1.5 * psi * im)
-    grad[1][inside] = problem.A * (dpr * ut * dy - 1.5 * psi * re)
-    return value, grad
+def u_and_grad_u(problem: ExactProblem, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(u(x), ∇u(x))`` (``problem.u_and_grad_u``: for the manufactured ``Problem`` with one
+    evaluation of its polar quantities, bit for bit ``problem.u(x)`` and ``problem.grad_u(x)``)."""
+    return problem.u_and_grad_u(x)

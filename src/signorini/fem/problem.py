@@ -1,5 +1,8 @@
-"""The manufactured Signorini solution of Christof & Haubner, Section 7.
+"""The problems (S): ``-Δu + c u = f`` in the unit square with the Signorini conditions on the
+boundary and a known solution ``u``, what the assembly, the norms and the stages take (``ExactProblem``),
+and the one factory of a problem from a scene's parameters (``make_problem``).
 
+The paper's problem is the manufactured solution of Christof & Haubner, Section 7 (``Problem``):
 ``u(x) = A ψ(r) ũ(r, θ)`` with ``ũ = -r^{3/2} sin(3θ/2)`` in polar coordinates
 centred at the free point ``(x0, 0)`` on the bottom edge, ``ψ`` the degree-9
 cut-off with ``ψ(0) = 1``, ``ψ^{(k)}(0) = 0`` (k = 1..4) and ``ψ^{(k)}(R) = 0``
@@ -8,23 +11,152 @@ cut-off with ``ψ(0) = 1``, ``ψ^{(k)}(0) = 0`` (k = 1..4) and ``ψ^{(k)}(R) = 0
     -Δu = -A (2 ψ'(r) ∂_r ũ + ũ (ψ''(r) + ψ'(r)/r)),
 
 so ``f`` has a closed form that stays bounded (ψ' = O(r⁴) near r = 0).
+
+A further problem is a frozen dataclass deriving from ``ProblemBase`` with its ``kind``, its
+parameters as fields (checked in ``__post_init__``: ``ProblemParameterError``) and ``u``,
+``grad_u``, ``f``, ``as_dict``; it overrides the optional capabilities it has; it is listed in
+``PROBLEM_KINDS`` and in the config schema's problem kinds (``$defs/problem_kind``).
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, fields, replace
+from typing import TYPE_CHECKING, ClassVar, Protocol
 
 import numpy as np
 
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+
+    from signorini.fem.derivatives import DerivativeBounds
+
 
 class ProblemParameterError(ValueError):
-    """A manufactured-problem parameter is out of its admissible range."""
+    """A problem parameter is out of its admissible range; ``parameter`` names it (None: the
+    parameters together, or the kind)."""
+
+    def __init__(self, message: str, parameter: str | None = None):
+        super().__init__(message)
+        self.parameter = parameter
+
+
+class ExactProblem(Protocol):
+    """What the assembly, the norms and the stages use of a problem: the reaction coefficient ``c``,
+    ``u``, ``∇u`` and ``f`` at points ``x`` of shape (2, ...), and its parameters (``as_dict``); and
+    the optional capabilities, which ``ProblemBase`` gives as their defaults: the points where ``u``
+    is not smooth (``singular_points``: boundary rules split and grade there) and further break points
+    on ∂Ω (``boundary_breaks``: split there), bounds of the derivatives of ``u`` (``derivative_bounds``,
+    by which the true maxima exclude triangles), ``u`` with ``∇u`` in one evaluation, and the problem
+    with ``u ≡ 0`` on the same pieces (``vanishing``: the norms of a P1 function, e.g. an algebraic
+    error, are its errors there)."""
+
+    c: float
+
+    def u(self, x: np.ndarray) -> np.ndarray: ...
+
+    def grad_u(self, x: np.ndarray) -> np.ndarray: ...
+
+    def f(self, x: np.ndarray) -> np.ndarray: ...
+
+    def as_dict(self) -> dict: ...
+
+    def singular_points(self) -> np.ndarray: ...
+
+    def boundary_breaks(self) -> np.ndarray: ...
+
+    def derivative_bounds(self) -> DerivativeBounds | None: ...
+
+    def u_and_grad_u(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def vanishing(self) -> ExactProblem: ...
+
+
+class ProblemBase:
+    """The defaults of the optional capabilities of ``ExactProblem``: no singular point, no break
+    point, no bounds of the derivatives, ``u`` and ``∇u`` evaluated apart, ``u ≡ 0`` as a
+    ``Vanishing`` problem; and the construction from a scene's parameters."""
+
+    kind: ClassVar[str]
+
+    def singular_points(self) -> np.ndarray:
+        """(2, k) points where ``u`` is not smooth: none."""
+        return np.zeros((2, 0))
+
+    def boundary_breaks(self) -> np.ndarray:
+        """(2, k) further points on ∂Ω where ``u`` is less smooth: none."""
+        return np.zeros((2, 0))
+
+    def derivative_bounds(self) -> DerivativeBounds | None:
+        """Bounds of the derivatives of ``u``: none known."""
+        return None
+
+    def u_and_grad_u(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(u(x), ∇u(x))``."""
+        return self.u(x), self.grad_u(x)
+
+    def vanishing(self) -> ExactProblem:
+        """``u ≡ 0`` with this problem's points (``Vanishing``)."""
+        return Vanishing(self)
+
+    @classmethod
+    def parameters(cls) -> tuple[str, ...]:
+        """The names of the problem's parameters (its fields)."""
+        return tuple(f.name for f in fields(cls))
+
+    @classmethod
+    def from_params(cls, params: Mapping) -> ProblemBase:
+        """The problem of a parameter block (integers as floats)."""
+        return cls(**{k: float(v) if type(v) is int else v for k, v in params.items()})
+
+
+class _ZeroBounds:
+    """The derivatives of ``u ≡ 0``: all zero."""
+
+    def hessian_bound(self, r_lo: np.ndarray, r_hi: np.ndarray) -> np.ndarray:
+        return np.zeros(np.broadcast(r_lo, r_hi).shape)
+
+    def gradient_holder_bound(self, r_hi: np.ndarray) -> np.ndarray:
+        return np.zeros(np.shape(r_hi))
 
 
 @dataclass(frozen=True)
-class Problem:
-    """Parameters of the manufactured solution (defaults: the paper's)."""
+class Vanishing(ProblemBase):
+    """``u ≡ 0`` (and ``f ≡ 0``) with the reaction, singular and break points of ``problem``: the
+    boundary rules split where the problem's do."""
 
+    problem: ExactProblem
+
+    @property
+    def c(self) -> float:
+        return self.problem.c
+
+    def u(self, x: np.ndarray) -> np.ndarray:
+        return np.zeros(np.shape(x)[1:])
+
+    def grad_u(self, x: np.ndarray) -> np.ndarray:
+        return np.zeros(np.shape(x))
+
+    def f(self, x: np.ndarray) -> np.ndarray:
+        return np.zeros(np.shape(x)[1:])
+
+    def as_dict(self) -> dict:
+        return {**self.problem.as_dict(), "vanishing": True}
+
+    def singular_points(self) -> np.ndarray:
+        return self.problem.singular_points()
+
+    def boundary_breaks(self) -> np.ndarray:
+        return self.problem.boundary_breaks()
+
+    def derivative_bounds(self) -> DerivativeBounds:
+        return _ZeroBounds()
+
+
+@dataclass(frozen=True)
+class Problem(ProblemBase):
+    """The paper's manufactured solution (module docstring) by its parameters (defaults: the paper's)."""
+
+    kind: ClassVar[str] = "manufactured"
     x0: float = 0.5  # free point (x0, 0) on the bottom edge
     R: float = 0.45  # support radius of the cut-off ψ
     A: float = 10.0  # amplitude
@@ -34,26 +166,27 @@ class Problem:
         for name in ("x0", "R", "A", "c"):
             value = getattr(self, name)
             if not isinstance(value, (int, float)) or not np.isfinite(value):
-                raise ProblemParameterError(f"problem parameter {name}={value!r} must be a finite number")
+                raise ProblemParameterError(f"problem parameter {name}={value!r} must be a finite number", name)
         if not 0.0 < self.x0 < 1.0:
-            raise ProblemParameterError(f"x0={self.x0} must lie strictly inside the bottom edge (0, 1)")
+            raise ProblemParameterError(f"x0={self.x0} must lie strictly inside the bottom edge (0, 1)", "x0")
         if not self.R > 0.0:
-            raise ProblemParameterError(f"R={self.R} must be positive")
+            raise ProblemParameterError(f"R={self.R} must be positive", "R")
         if self.x0 - self.R <= 0.0 or self.x0 + self.R >= 1.0 or self.R >= 1.0:
             raise ProblemParameterError(
                 f"support of u (disc of radius R={self.R} around ({self.x0}, 0)) must stay inside the "
-                "unit square: need R < x0 and x0 + R < 1"
+                "unit square: need R < x0 and x0 + R < 1",
+                "R",
             )
         if self.A < 0.0:
-            raise ProblemParameterError(f"amplitude A={self.A} must be non-negative (A < 0 violates u ≥ 0)")
+            raise ProblemParameterError(f"amplitude A={self.A} must be non-negative (A < 0 violates u ≥ 0)", "A")
         if self.c < 0.0:
-            raise ProblemParameterError(f"reaction coefficient c={self.c} must be non-negative")
+            raise ProblemParameterError(f"reaction coefficient c={self.c} must be non-negative", "c")
 
     def as_dict(self) -> dict[str, float]:
         return {k: float(v) for k, v in asdict(self).items()}
 
     @classmethod
-    def from_params(cls, params: dict) -> Problem:
+    def from_params(cls, params: Mapping) -> Problem:
         """The problem of a scene's ``problem`` block (numbers as floats)."""
         return cls(**{k: float(v) for k, v in params.items()})
 
@@ -64,6 +197,30 @@ class Problem:
     def boundary_breaks(self) -> np.ndarray:
         """(2, 2): (x0 ± R, 0), where the cut-off joins 0 (C⁴ only): boundary rules split there."""
         return np.array([[self.x0 - self.R, self.x0 + self.R], [0.0, 0.0]])
+
+    def vanishing(self) -> Problem:
+        """The same problem with amplitude 0: u ≡ 0 with the same free point and cut-off."""
+        return replace(self, A=0.0)
+
+    def derivative_bounds(self) -> DerivativeBounds:
+        """The bounds derived from the closed form (``fem.derivatives.ManufacturedBounds``)."""
+        from signorini.fem.derivatives import ManufacturedBounds
+
+        return ManufacturedBounds(self)
+
+    def u_and_grad_u(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(u(x), ∇u(x))`` with one evaluation of the polar quantities, bit for bit ``u(x)`` and
+        ``grad_u(x)`` (the same operations; for ``A = 0`` zeros without evaluating them, where those
+        give zeros of either sign)."""
+        if self.A == 0.0:  # u ≡ 0 (the norms of a P1 function, e.g. an algebraic error): nothing to evaluate
+            return np.zeros(np.shape(x)[1:]), np.zeros(np.shape(x))
+        inside, dx, dy, r, re, im, ut = self._local(x)
+        value, grad = np.zeros(np.shape(x)[1:]), np.zeros(np.shape(x))
+        psi, dpr = self.psi(r), self.dpsi_over_r(r)
+        value[inside] = self.A * psi * ut
+        grad[0][inside] = self.A * (dpr * ut * dx - 1.5 * psi * im)
+        grad[1][inside] = self.A * (dpr * ut * dy - 1.5 * psi * re)
+        return value, grad
 
     # --- the cut-off ψ(r) = 1 - S(r/R), S(s) = s⁵(126 - 420 s + 540 s² - 315 s³ + 70 s⁴) ---
     def psi(self, r: np.ndarray) -> np.ndarray:
@@ -143,8 +300,7 @@ class Problem:
 
 # --- problems with simple data and a closed-form solution (stability atlas, degenerate contact) ---
 #
-# Same interface as ``Problem`` (``u``, ``grad_u``, ``f``, ``c``, ``as_dict``), so ``assembly``,
-# ``discrete`` and ``norms`` take them unchanged.  With f ≡ const the load vector is
+# With f ≡ const the load vector is
 # ``b = f M 1`` (the quadrature is exact), and ``K 1 = 0`` (no Dirichlet part), so the
 # constant solutions below are also the *discrete* solutions, up to round-off.
 
@@ -154,13 +310,13 @@ def _check_parameters(obj, names: tuple[str, ...]) -> None:
     for name in names:
         value = getattr(obj, name)
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
-            raise ProblemParameterError(f"problem parameter {name}={value!r} must be a finite number")
+            raise ProblemParameterError(f"problem parameter {name}={value!r} must be a finite number", name)
     if obj.c < 0.0:
-        raise ProblemParameterError(f"reaction coefficient c={obj.c} must be non-negative")
+        raise ProblemParameterError(f"reaction coefficient c={obj.c} must be non-negative", "c")
 
 
 @dataclass(frozen=True)
-class ConstantProblem:
+class ConstantProblem(ProblemBase):
     """``-Δu + c u = f ≡ value`` with the Signorini conditions on all of ∂Ω.
 
     - ``value > 0``, ``c > 0``: ``u ≡ value / c``; ``u > 0`` and ``∂_ν u = 0`` on ∂Ω, so the
@@ -175,6 +331,7 @@ class ConstantProblem:
       ``-Δ0 + c 0 = 0 ≠ -1`` in Ω.
     """
 
+    kind: ClassVar[str] = "constant"
     value: float = 1.0
     c: float = 1.0
 
@@ -183,10 +340,11 @@ class ConstantProblem:
         if self.value < 0.0:
             raise ProblemParameterError(
                 f"value={self.value} < 0: the solution is the Dirichlet solution, not known in closed form "
-                "(use FullContactProblem for full contact)"
+                "(use FullContactProblem for full contact)",
+                "value",
             )
         if self.value > 0.0 and self.c == 0.0:
-            raise ProblemParameterError("value > 0 needs c > 0 (for c = 0 the problem has no solution: ∫f > 0)")
+            raise ProblemParameterError("value > 0 needs c > 0 (for c = 0 the problem has no solution: ∫f > 0)", "c")
 
     @property
     def exact(self) -> float:
@@ -194,7 +352,7 @@ class ConstantProblem:
         return self.value / self.c if self.value > 0.0 else 0.0
 
     def as_dict(self) -> dict[str, float | str]:
-        return {"kind": "constant", "value": float(self.value), "c": float(self.c)}
+        return {"kind": self.kind, "value": float(self.value), "c": float(self.c)}
 
     def u(self, x: np.ndarray) -> np.ndarray:
         return np.full(np.shape(x)[1:], self.exact)
@@ -207,7 +365,7 @@ class ConstantProblem:
 
 
 @dataclass(frozen=True)
-class FullContactProblem:
+class FullContactProblem(ProblemBase):
     """``u = -A sin(π x₁) sin(π x₂)``, ``f = -Δu + c u = -A (2π² + c) sin(π x₁) sin(π x₂) ≤ 0``.
 
     ``u = 0`` on ∂Ω and ``∂_ν u = A π sin(π s) ≥ 0`` (``s`` the arclength on an edge), so
@@ -215,16 +373,17 @@ class FullContactProblem:
     except at the four corners, where ``∂_ν u = 0`` (biactive).
     """
 
+    kind: ClassVar[str] = "full_contact"
     A: float = 1.0
     c: float = 1.0
 
     def __post_init__(self) -> None:
         _check_parameters(self, ("A", "c"))
         if self.A < 0.0:
-            raise ProblemParameterError(f"amplitude A={self.A} must be non-negative (A < 0 violates ∂_ν u ≥ 0)")
+            raise ProblemParameterError(f"amplitude A={self.A} must be non-negative (A < 0 violates ∂_ν u ≥ 0)", "A")
 
     def as_dict(self) -> dict[str, float | str]:
-        return {"kind": "full_contact", "A": float(self.A), "c": float(self.c)}
+        return {"kind": self.kind, "A": float(self.A), "c": float(self.c)}
 
     def u(self, x: np.ndarray) -> np.ndarray:
         return -self.A * np.sin(np.pi * x[0]) * np.sin(np.pi * x[1])
@@ -238,17 +397,36 @@ class FullContactProblem:
         return (2.0 * np.pi**2 + self.c) * self.u(x)
 
 
-PROBLEM_KINDS = {"manufactured": Problem, "constant": ConstantProblem, "full_contact": FullContactProblem}
+# the problems by kind: the config schema lists the same kinds ($defs/problem_kind)
+PROBLEM_KINDS: dict[str, type[ProblemBase]] = {cls.kind: cls for cls in (Problem, ConstantProblem, FullContactProblem)}
+DEFAULT_KIND = Problem.kind  # a parameter block without ``kind``: the paper's problem
 
 
-def make_problem(params: dict):
-    """A problem from a parameter mapping; ``kind`` (default ``manufactured``) selects the class
-    of ``PROBLEM_KINDS``, the other keys are its parameters."""
-    params = dict(params)
-    kind = params.pop("kind", "manufactured")
+def problem_class(params: Mapping) -> type[ProblemBase]:
+    """The class of the problem ``params`` describe (its ``kind``, default ``DEFAULT_KIND``)."""
+    kind = params.get("kind", DEFAULT_KIND)
     if kind not in PROBLEM_KINDS:
-        raise ProblemParameterError(f"unknown problem kind {kind!r}; choose one of {sorted(PROBLEM_KINDS)}")
+        raise ProblemParameterError(f"unknown problem kind {kind!r}; choose one of {sorted(PROBLEM_KINDS)}", "kind")
+    return PROBLEM_KINDS[kind]
+
+
+def make_problem(params: Mapping) -> ExactProblem:
+    """The problem of a parameter block (a scene's ``problem``, an atlas case's, a recorded one):
+    ``kind`` (default ``DEFAULT_KIND``, the paper's manufactured problem) selects the class of
+    ``PROBLEM_KINDS``, the other keys are its parameters (``from_params``); a kind, a parameter
+    name or value the class does not admit raises ``ProblemParameterError``."""
+    cls = problem_class(params)
+    own = {k: v for k, v in params.items() if k != "kind"}
+    unknown = sorted(set(own) - set(cls.parameters()))
+    if unknown:
+        raise ProblemParameterError(
+            f"{cls.kind} problem: unknown parameter {', '.join(map(repr, unknown))}; its parameters: "
+            f"{', '.join(cls.parameters())}",
+            unknown[0],
+        )
     try:
-        return PROBLEM_KINDS[kind](**params)
-    except TypeError as err:
-        raise ProblemParameterError(f"{kind} problem: {err}") from None
+        return cls.from_params(own)
+    except ProblemParameterError:
+        raise
+    except (TypeError, ValueError) as err:
+        raise ProblemParameterError(f"{cls.kind} problem: {err}") from None

@@ -1,5 +1,5 @@
-"""Solving (S_h): an exact active-set route (direct, multigrid or ``auto``) with a cascade warm
-start, or any solver route of ``signorini.solvers``."""
+"""Solving (S_h): an exact active-set route (``direct``, ``multigrid`` or ``auto``) with a cascade
+warm start, or any solver route of ``signorini.solvers``."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ CASCADE_FACTOR = 4  # coarse level N // 4 provides the warm start of level N
 CASCADE_MIN_N = 24  # below this, solve cold
 
 
-def cascade_start(disc: DiscreteProblem, solver: str = "active_set", **options) -> np.ndarray | None:
+def cascade_start(disc: DiscreteProblem, solver: str = "direct", **options) -> np.ndarray | None:
     """The cascade's warm start of level ``N``: the solution on the coarser mesh
     ``N // CASCADE_FACTOR`` (itself solved with the cascade) interpolated onto ``disc``'s
     nodes; None below ``CASCADE_MIN_N`` (the cascade solves cold there).  What
@@ -31,9 +31,9 @@ def cascade_start(disc: DiscreteProblem, solver: str = "active_set", **options) 
 
 
 def solve_discrete(
-    disc: DiscreteProblem, solver: str = "active_set", warm_start: str | np.ndarray | None = "cascade", **options
+    disc: DiscreteProblem, solver: str = "direct", warm_start: str | np.ndarray | None = "cascade", **options
 ) -> SolveResult:
-    """Solve (S_h).  For the exact routes (``active_set``, ``multigrid``, ``auto``),
+    """Solve (S_h).  For the exact routes (``solvers.routes.EXACT_SOLVERS``),
     ``warm_start="cascade"`` first solves on the coarser mesh ``N // CASCADE_FACTOR``
     (recursively, with the same route name: ``auto`` picks by each mesh's size) and starts from
     its interpolant (``cascade_start``); when the active set does not settle from that start in

@@ -191,18 +191,29 @@ def schema_message(error) -> str:
 def apply_scene_defaults(config: dict) -> dict:
     """Fill in every scene's fields from the config's ``scene_defaults`` (in place; the config is
     returned): a field a scene does not give is a copy of the default, and a mapping such as
-    ``problem`` is merged field by field (a scene's ``problem: {A: 5}`` changes only ``A``)."""
+    ``problem`` is merged field by field (a scene's ``problem: {A: 5}`` changes only ``A``; a
+    problem of another ``kind`` than the default's is the scene's own)."""
     defaults = config.get("scene_defaults") or {}
     for block in (config.get("scenes") or {}).values():
         if not isinstance(block, dict):
             continue  # the schema check names it
         for key, value in defaults.items():
             given = block.get(key)
-            if isinstance(value, dict) and isinstance(given, dict):
+            if isinstance(value, dict) and isinstance(given, dict) and _same_kind(value, given):
                 block[key] = copy.deepcopy(value) | given
             elif key not in block:
                 block[key] = copy.deepcopy(value)
     return config
+
+
+def _same_kind(default: Mapping, given: Mapping) -> bool:
+    """Whether two problem blocks are of one kind (``fem.problem.make_problem``; without a ``kind``
+    the default one); other mappings have none."""
+    if "kind" not in default and "kind" not in given:
+        return True
+    from signorini.fem.problem import DEFAULT_KIND
+
+    return default.get("kind", DEFAULT_KIND) == given.get("kind", DEFAULT_KIND)
 
 
 def load_config(path: str | os.PathLike = DEFAULT_CONFIG) -> dict:
@@ -461,7 +472,7 @@ def check_amplitude(field: str, A: float, R: float, Ns: Sequence[int], c: float 
         raise ConfigError(
             f"{field}: {A!r} is too large for conjugate gradients (the multigrid route, the theory quantities): "
             f"the energy A²·a(u₁, u₁) = {energy_of_u1(R, c):.3g}·A² (R = {R}, c = {c}) would overflow to inf; need "
-            f"A ≤ {ceiling:.4e}, or the active_set solver"
+            f"A ≤ {ceiling:.4e}, or the direct route (solver: direct)"
         )
 
 
@@ -494,7 +505,7 @@ def check_support(where: str, problem, Ns: Sequence[int]) -> None:
     raise ConfigError(f"{where}.N[0]: {what}; start the meshes at N = {need_N} (R ≥ {SUPPORT_CELLS}h)")
 
 
-def check_memory(field: str, N: int, limit_mb: int, available: str = "available", solver: str = "active_set") -> None:
+def check_memory(field: str, N: int, limit_mb: int, available: str = "available", solver: str = "direct") -> None:
     """The largest job on mesh ``N`` with solves by ``solver`` (``resources.largest_job``) fits
     into ``limit_mb``."""
     from signorini.pipeline.resources import largest_job
@@ -550,9 +561,31 @@ def _check_figures_scene(config: Mapping, scenes: Mapping) -> None:
         raise ConfigError(f"figures_scene: scene {fig!r} has one mesh; Table 2's EOCs need two at least")
 
 
+def _check_problem(where: str, block: Mapping, Ns: Sequence[int], energies: bool) -> None:
+    """The scene's problem (``fem.problem.make_problem``): a known kind with each of its parameters
+    given and admitted by its class (the error names the parameter); for the paper's manufactured
+    problem also its amplitude (``check_amplitude``) and support (``check_support``) on the meshes."""
+    from signorini.fem.problem import DEFAULT_KIND, ProblemParameterError, make_problem, problem_class
+
+    try:
+        kind = problem_class(block)
+        missing = [name for name in kind.parameters() if name not in block]
+        if missing:
+            raise ConfigError(
+                f"{where}.problem: {', '.join(map(repr, missing))} missing (the {kind.kind} problem's parameters: "
+                f"{', '.join(kind.parameters())})"
+            )
+        problem = make_problem(block)
+    except ProblemParameterError as err:
+        field = f"{where}.problem" + (f".{err.parameter}" if err.parameter else "")
+        raise ConfigError(f"{field}: {err}") from None
+    if problem.kind == DEFAULT_KIND:
+        check_amplitude(f"{where}.problem.A", problem.A, problem.R, Ns, problem.c, energies)
+        check_support(where, problem, Ns)
+
+
 def _check_scene(where: str, scene: Mapping, limit: int, available: str, node: NodeLimits | None) -> None:
     from signorini.fem.norms.conventions import Conventions
-    from signorini.fem.problem import Problem, ProblemParameterError
     from signorini.pipeline.solver_options import check_options
 
     Ns = scene.get("N", [])
@@ -565,13 +598,7 @@ def _check_scene(where: str, scene: Mapping, limit: int, available: str, node: N
     check_norm_names(f"{where}.norms", scene.get("norms", []))
     if node is not None:
         _check_runtime(where, Ns, scene.get("norms", []), node)
-    try:
-        problem = Problem(**scene.get("problem", {}))
-    except (ProblemParameterError, TypeError) as err:
-        raise ConfigError(f"{where}.problem: {err}") from None
-    energies = _runs_conjugate_gradients(where, scene, Ns)
-    check_amplitude(f"{where}.problem.A", problem.A, problem.R, Ns, problem.c, energies)
-    check_support(where, problem, Ns)
+    _check_problem(where, scene.get("problem", {}), Ns, _runs_conjugate_gradients(where, scene, Ns))
     _check_study_and_atlas(where, scene)
     try:
         Conventions(**scene.get("conventions", {}))

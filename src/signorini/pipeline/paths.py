@@ -7,6 +7,8 @@ the rules, the cache checks, the notebooks' helpers and the tests all read them 
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 RESULTS = "results"  # the cached artifacts, logs and benchmark files
 FIGDIR = "paper_figures"
 # the seals of the files a job writes that carry no checksum of their own (tables, pages, figures):
@@ -126,15 +128,33 @@ class _Open(dict):
         return "{" + key + "}"
 
 
-# the target rules and the rules whose outputs they render
-TARGETS = {
-    "all": ("table1", "table2", "figure2", "figure3", "reproduction", "runtime", "summary"),
-    "theory": ("theory_report", "contact_set"),
-    "work_precision": ("work_precision_table", "work_precision_figures", "work_precision_report"),
-    "stability": ("stability_atlas",),
-    "true_norms": ("true_tables", "free_point_error"),
-    "fine": ("fine_tables", "eoc_against_h"),
+class Target(NamedTuple):
+    """A target rule: the rules whose outputs it renders, what the report calls it and the command
+    that computes it."""
+
+    rules: tuple[str, ...]
+    title: str
+    command: str
+
+
+# the target rules (the Snakefile's, the report's)
+TARGET_RULES = {
+    "all": Target(
+        ("table1", "table2", "figure2", "figure3", "reproduction", "runtime", "summary"),
+        "paper (Tables 1-2, Figures 2-3)",
+        "make all",
+    ),
+    "theory": Target(("theory_report", "contact_set"), "theory scene", "snakemake -c2 theory"),
+    "work_precision": Target(
+        ("work_precision_table", "work_precision_figures", "work_precision_report"),
+        "work-precision study",
+        "snakemake -c2 work_precision",
+    ),
+    "stability": Target(("stability_atlas",), "stability atlas", "snakemake -c2 stability"),
+    "true_norms": Target(("true_tables", "free_point_error"), "true norms", "snakemake -c2 true_norms"),
+    "fine": Target(("fine_tables", "eoc_against_h"), "Table 2 to h = 1/4001", "snakemake -c2 fine"),
 }
+TARGETS = {name: target.rules for name, target in TARGET_RULES.items()}  # the rules each target renders
 
 
 # what a rendering rule reads from other rendering rules: it is in the report only with them
@@ -147,22 +167,34 @@ RENDER_INPUTS = {
     "eoc_against_h": ("true_tables", "fine_tables"),
 }
 
-# The report's pages (signorini.studies.report): {page: the Markdown output it shows inline}, each
-# rendered to results/report/<page>.html; and one page per scene with its errors and EOCs.
+class ReportPage(NamedTuple):
+    """A page of the report: the Markdown output it shows inline, and its place in the report's
+    menu: the caption (``workflow/report/<caption>.rst``, as the rule that writes the source),
+    category and subcategory."""
+
+    source: str
+    caption: str
+    category: str
+    subcategory: str | None = None
+
+
+# The report's pages (signorini.studies.report, workflow/rules/report.smk), each rendered to
+# results/report/<page>.html; and one page per scene with its errors and EOCs.
 REPORT_DIR = "results/report"
-REPORT_PAGES = {
-    "summary": FIGURES["summary"]["md"],
-    "table1": FIGURES["table1"]["md"],
-    "table2": FIGURES["table2"]["md"],
-    "reproduction": FIGURES["reproduction"]["md"],
-    "table1_true": FIGURES["true_tables"]["table1_md"],
-    "table2_true": FIGURES["true_tables"]["table2_md"],
-    "table1_fine": FIGURES["fine_tables"]["table1_md"],
-    "table2_fine": FIGURES["fine_tables"]["table2_md"],
-    "theory": FIGURES["theory_report"]["md"],
-    "work_precision": FIGURES["work_precision_report"]["md"],
-    "stability": FIGURES["stability_atlas"]["md"],
+REPORT_PAGE_ENTRIES = {
+    "summary": ReportPage(FIGURES["summary"]["md"], "summary", "Findings"),
+    "table1": ReportPage(FIGURES["table1"]["md"], "table1", "Paper", "Tables"),
+    "table2": ReportPage(FIGURES["table2"]["md"], "table2", "Paper", "Tables"),
+    "reproduction": ReportPage(FIGURES["reproduction"]["md"], "reproduction", "Paper", "Reproduction"),
+    "table1_true": ReportPage(FIGURES["true_tables"]["table1_md"], "true_tables", "Paper", "True norms"),
+    "table2_true": ReportPage(FIGURES["true_tables"]["table2_md"], "true_tables", "Paper", "True norms"),
+    "table1_fine": ReportPage(FIGURES["fine_tables"]["table1_md"], "fine_tables", "Theory", "Finer meshes"),
+    "table2_fine": ReportPage(FIGURES["fine_tables"]["table2_md"], "fine_tables", "Theory", "Finer meshes"),
+    "theory": ReportPage(FIGURES["theory_report"]["md"], "theory", "Theory"),
+    "work_precision": ReportPage(FIGURES["work_precision_report"]["md"], "work_precision", "Work precision"),
+    "stability": ReportPage(FIGURES["stability_atlas"]["md"], "stability", "Stability"),
 }
+REPORT_PAGES = {page: entry.source for page, entry in REPORT_PAGE_ENTRIES.items()}  # {page: its Markdown source}
 REPORT_SCENE_PAGE = f"{REPORT_DIR}/scene_{{scene}}.html"
 REPORT_CONTENTS = f"{REPORT_DIR}/contents.html"  # what is in the report, built here or committed
 

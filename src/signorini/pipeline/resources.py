@@ -182,7 +182,7 @@ def given_mem_mb(workflow) -> int | None:
     return value if isinstance(value, int) else None
 
 
-def largest_job(N: int, solver: str = "active_set") -> tuple[str, int]:
+def largest_job(N: int, solver: str = "direct") -> tuple[str, int]:
     """The scene job with the largest memory request on mesh ``N`` when its solves use ``solver``:
     (rule, MB)."""
     rules = (solve_rule(solver, N) if rule == "solve" else rule for rule in SCENE_RULES)

@@ -2,24 +2,21 @@
 
 A configuration's solver options (a scene's ``solver_options``, a work-precision configuration's
 ``options``, an atlas column's ``options``) are checked at parse time, every Snakemake call, so
-nothing here imports a solver: the active-set and cvxpy signatures are read from the source of
-``signorini.solvers`` (``ast``), Clarabel's settings from its extension (about 1 ms), and OSQP's
-and SCS's from the tables below (importing OSQP pulls in ``scipy.sparse``, about 0.5 s; SCS names
-its settings nowhere but in its documentation).  ``tests/pipeline/test_solver_options.py`` checks both tables
-against the installed packages.
+nothing here imports a solver: the routes' own options are declared in ``signorini.solvers.routes``
+(tied to their signatures by its tests), Clarabel's settings are read from its extension (about
+1 ms), and OSQP's and SCS's from the tables below (importing OSQP pulls in ``scipy.sparse``, about
+0.5 s; SCS names its settings nowhere but in its documentation).
+``tests/pipeline/test_solver_options.py`` checks both tables against the installed packages.
 """
 
 from __future__ import annotations
 
-import ast
 import math
 import re
 from collections.abc import Mapping
-from functools import cache
-from pathlib import Path
-from typing import NamedTuple
 
-_SOLVERS = Path(__file__).resolve().parents[1] / "solvers"
+from signorini.solvers import routes
+from signorini.solvers.routes import Option
 
 # OSQP 1.x settings (osqp.ext_builtin.OSQPSettings); the flags are integers there, true/false is fine
 OSQP_SETTINGS: dict[str, type] = {
@@ -47,18 +44,6 @@ SCS_VIA_CVXPY: dict[str, type] = {"eps": float, "use_indirect": bool}
 CVXPY_SOLVE: dict[str, type] = {"verbose": bool, "ignore_dpp": bool, "enforce_dpp": bool, "canon_backend": str}
 
 
-_BUILTIN = {"int": int, "float": float, "bool": bool, "str": str}
-
-
-class Option(NamedTuple):
-    """What an option accepts: values of ``kind`` (None: any), and null when ``nullable``; its
-    ``default`` where known (the solvers' own signatures)."""
-
-    kind: type | None
-    nullable: bool = False
-    default: object = None
-
-
 # the values a solver can use, beyond their type (``value_problem``): the names of the tolerances
 # (kkt_tol, tol, inner_rtol, eps_abs, tol_gap_rel, iterative_refinement_reltol, ...) of every route
 TOLERANCE = re.compile(r"(^|_)((r|abs|rel)?tol|eps)(_|$)")
@@ -73,34 +58,9 @@ FINITE_TIME_LIMITS = frozenset({"time_limit_secs"})  # SCS: "a nonnegative finit
 ORDERED_TOLERANCES = (("tol", "inner_rtol"),)
 
 
-@cache
 def exact_routes() -> tuple[str, ...]:
-    """The certified active-set routes, ``signorini.solvers.EXACT_SOLVERS``, read from its source."""
-    tree = ast.parse((_SOLVERS / "__init__.py").read_text(encoding="utf-8"))
-    for node in tree.body:
-        if isinstance(node, ast.Assign) and any(getattr(t, "id", None) == "EXACT_SOLVERS" for t in node.targets):
-            return tuple(ast.literal_eval(node.value))
-    raise RuntimeError("signorini/solvers/__init__.py defines no EXACT_SOLVERS")
-
-
-@cache
-def signature_options(module: str, function: str) -> dict[str, Option]:
-    """The keyword parameters of ``signorini.solvers.<module>.<function>`` after the data
-    ``(A, b, constrained)``, read from the source: the type of the default, or for a default of
-    None the builtin type of the annotation ``T | None`` (any other: any type)."""
-    tree = ast.parse((_SOLVERS / f"{module}.py").read_text(encoding="utf-8"))
-    node = next(n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name == function)
-    params = node.args.args[3:]
-    defaults = node.args.defaults[-len(params) :] if params else []
-    options: dict[str, Option] = {}
-    for param, default in zip(params, defaults, strict=True):
-        value = ast.literal_eval(default)
-        if value is None:
-            first, _, rest = (ast.unparse(param.annotation) if param.annotation else "").partition(" | ")
-            options[param.arg] = Option(_BUILTIN.get(first) if rest == "None" else None, nullable=True)
-        else:
-            options[param.arg] = Option(type(value), default=value)
-    return options
+    """The names of the certified active-set routes (``signorini.solvers.routes.EXACT_SOLVERS``)."""
+    return routes.EXACT_SOLVERS
 
 
 def _clarabel_settings() -> dict[str, type]:
@@ -124,22 +84,22 @@ def qp_settings(qp_solver: str) -> dict[str, type] | None:
 
 def route_options(route: str) -> tuple[str, dict[str, Option] | None]:
     """The function a solver route reaches and the options it accepts (None: not checked): the
-    scene's solver names (``active_set``, ``multigrid``, ``auto``, ``cvxpy_<QP>``) and a
-    work-precision configuration's (an exact route or the QP solver's name, e.g. ``OSQP``).
+    scene's solver names (``signorini.solvers.routes``: a route, an alias, ``auto``, ``cvxpy_<QP>``)
+    and a work-precision configuration's (an exact route or the QP solver's name, e.g. ``OSQP``).
     ``auto`` takes the options both exact routes accept (it picks one by the mesh's size)."""
-    if route == "active_set":
-        return "active_set_solve", signature_options("active_set", "active_set_solve")
-    if route == "multigrid":
-        return "multigrid_solve", signature_options("multigrid", "multigrid_solve")
-    if route == "auto":
-        direct, multigrid = route_options("active_set")[1], route_options("multigrid")[1]
-        return "active_set_solve and multigrid_solve", {k: v for k, v in direct.items() if k in multigrid}
-    qp = route.removeprefix("cvxpy_")
+    name = routes.canonical(route)
+    if name == routes.AUTO:
+        direct, multigrid = routes.DIRECT, routes.MULTIGRID
+        common = {k: v for k, v in direct.options.items() if k in multigrid.options}
+        return f"{direct.function} and {multigrid.function}", common
+    if name in routes.ROUTES and routes.ROUTES[name].qp_parameter is None:
+        return routes.ROUTES[name].function, dict(routes.ROUTES[name].options)
+    qp = route.removeprefix(f"{routes.CVXPY.name}_")
+    function = f"{routes.CVXPY.function}/{qp.upper()}"
     settings = qp_settings(qp)
     if settings is None:
-        return f"cvxpy_solve/{qp.upper()}", None
-    own = {k: v for k, v in signature_options("cvxpy_qp", "cvxpy_solve").items() if k != "solver"}
-    return f"cvxpy_solve/{qp.upper()}", {**own, **{k: Option(t) for k, t in {**CVXPY_SOLVE, **settings}.items()}}
+        return function, None
+    return function, {**routes.CVXPY.options, **{k: Option(t) for k, t in {**CVXPY_SOLVE, **settings}.items()}}
 
 
 def value_problem(key: str, value: object, kind: type | None) -> str | None:
@@ -183,9 +143,9 @@ def check_options(where: str, route: str, options: Mapping) -> str | None:
     """The first problem with ``options`` of a solver ``route`` (an unknown name, a value of the
     wrong type, or one the solver cannot use: ``value_problem``, ``ORDERED_TOLERANCES``), as a
     message naming the field under ``where``, or None."""
-    if route == "cvxpy":  # the QP solver is an option itself
+    if route == routes.CVXPY.name:  # the QP solver is an option itself
         options = dict(options)
-        route = f"cvxpy_{options.pop('qp_solver', 'CLARABEL')}"
+        route = f"{routes.CVXPY.name}_{options.pop(routes.QP_OPTION, routes.DEFAULT_QP_SOLVER)}"
     function, accepted = route_options(route)
     for key, value in (options.items() if accepted is not None else ()):
         if key not in accepted:

@@ -1,63 +1,62 @@
 """Solvers for the discrete Signorini QP behind one interface.
 
-``solve(name, A, b, constrained, **options)`` with ``name`` one of ``SOLVERS``:
-``active_set`` (exact, certified, a sparse factorisation: the direct route), ``multigrid``
-(exact, certified, the same active-set iteration with multigrid-preconditioned CG: O(n)),
-``auto`` (``multigrid`` from ``MULTIGRID_FROM_UNKNOWNS`` unknowns on, ``active_set`` below) or
-``cvxpy`` (any installed cvxpy QP solver chosen by the ``qp_solver`` option); a shorthand
-``cvxpy_clarabel``, ``cvxpy_osqp``, … selects the QP solver in the name.
+``solve(name, A, b, constrained, **options)`` with ``name`` a route of ``solvers.routes``:
+``direct`` (exact, certified: the active-set iteration with each Newton system solved by a sparse
+factorisation; ``active_set`` is its earlier name), ``multigrid`` (exact, certified, the same
+iteration with multigrid-preconditioned CG: O(n)), ``auto`` (``multigrid`` from
+``MULTIGRID_FROM_UNKNOWNS`` unknowns on, ``direct`` below) or ``cvxpy`` (any installed cvxpy QP
+solver chosen by the ``qp_solver`` option); a shorthand ``cvxpy_clarabel``, ``cvxpy_osqp``, …
+selects the QP solver in the name.
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+from signorini.solvers.routes import (
+    DEFAULT_QP_SOLVER,
+    EXACT_SOLVERS,
+    MULTIGRID_FROM_UNKNOWNS,
+    QP_OPTION,
+    SOLVERS,
+    exact_route,
+    resolve,
+)
+
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     import numpy as np
     import scipy.sparse as sp
 
     from signorini.solvers.result import SolveResult
 
-SOLVERS = ("active_set", "multigrid", "auto", "cvxpy")
-EXACT_SOLVERS = ("active_set", "multigrid", "auto")  # the certified active-set routes
-# ``auto`` takes the multigrid route from this many unknowns on (N ≈ 345): the crossover of the
-# two routes on the paper's problem with the cascade and the geometric hierarchy, measured side by
-# side in one process on one thread at N = 201 to 451 (CPU seconds, two runs each: even at 201
-# and 301 within the runs' spread, multigrid ahead at 351, ×1.6 at 401 and ×1.9 at 451)
-MULTIGRID_FROM_UNKNOWNS = 120_000
 
-
-def exact_route(name: str, n: int) -> str:
-    """The route ``name`` takes for ``n`` unknowns: ``auto`` resolved by size, others as named."""
-    if name == "auto":
-        return "multigrid" if n >= MULTIGRID_FROM_UNKNOWNS else "active_set"
-    return name
-
-
-def solve(name: str, A: sp.spmatrix, b: np.ndarray, constrained: np.ndarray, **options) -> SolveResult:
-    """Dispatch to a solver route by name; unknown names raise ``ValueError``."""
+def route_functions() -> dict[str, Callable[..., SolveResult]]:
+    """{route name: its function} (``solvers.routes.ROUTES``), imported here: a solve job's code
+    inputs are the modules its imports name."""
     from signorini.solvers.active_set import active_set_solve
     from signorini.solvers.cvxpy_qp import cvxpy_solve
     from signorini.solvers.multigrid import multigrid_solve
 
-    name = exact_route(name, len(b))
-    if name == "active_set":
-        return active_set_solve(A, b, constrained, **options)
-    if name == "multigrid":
-        return multigrid_solve(A, b, constrained, **options)
-    if name == "cvxpy":
+    return {"direct": active_set_solve, "multigrid": multigrid_solve, "cvxpy": cvxpy_solve}
+
+
+def solve(name: str, A: sp.spmatrix, b: np.ndarray, constrained: np.ndarray, **options) -> SolveResult:
+    """Dispatch to a solver route by name (``solvers.routes.resolve``); unknown names raise
+    ``ValueError``.  A route that takes the QP solver by name gets it from the name or the option
+    ``qp_solver`` (default Clarabel), and no warm start."""
+    route, qp_solver = resolve(name, len(b))
+    if route.qp_parameter is not None:
         options.pop("warm_start", None)
-        return cvxpy_solve(A, b, constrained, solver=options.pop("qp_solver", "CLARABEL"), **options)
-    if name.startswith("cvxpy_"):
-        options.pop("warm_start", None)
-        return cvxpy_solve(A, b, constrained, solver=name.removeprefix("cvxpy_"), **options)
-    raise ValueError(f"unknown solver {name!r}; choose one of {SOLVERS} or cvxpy_<QP solver>")
+        options[route.qp_parameter] = qp_solver or options.pop(QP_OPTION, DEFAULT_QP_SOLVER)
+    return route_functions()[route.name](A, b, constrained, **options)
 
 
 def __getattr__(name: str) -> Any:
-    """The routes and the certificate's names, imported when first asked for: the names above
-    (the routes' names, ``exact_route``) serve the workflow's config checks, which must not pay for
-    numpy, scipy and cvxpy while Snakemake parses the workflow."""
+    """The routes' functions and the certificate's names, imported when first asked for: the names
+    above (``solvers.routes``) serve the workflow's config checks, which must not pay for numpy,
+    scipy and cvxpy while Snakemake parses the workflow."""
     if name in ("BadInputError", "Certificate", "KKTError", "NotConvergedError", "kkt_certificate"):
         from signorini.solvers import certificate as module
     elif name == "SolveResult":
@@ -88,5 +87,6 @@ __all__ = [
     "installed_qp_solvers",
     "kkt_certificate",
     "multigrid_solve",
+    "route_functions",
     "solve",
 ]

@@ -56,12 +56,12 @@ def linearised_error(
     u: np.ndarray,
     lam: np.ndarray,
     active: np.ndarray,
-    route: str = "active_set",
+    route: str = "direct",
     hierarchy: GalerkinHierarchy | None = None,
 ) -> AlgebraicError:
     """``AlgebraicError`` of ``(u, λ)`` with contact set ``active`` (constrained indices with ``u = 0``):
     ``A`` with the contact rows and columns replaced by the identity, solved by one sparse
-    factorisation (``route="active_set"``) or by multigrid-preconditioned CG (``"multigrid"``),
+    factorisation (the direct route, ``route="direct"``) or by multigrid-preconditioned CG (``"multigrid"``),
     with the solver's own ``hierarchy`` when given (``SolveResult.hierarchy``: no second set-up)."""
     A = sp.csr_matrix(A)
     free = np.ones(u.size, dtype=bool)

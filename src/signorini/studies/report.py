@@ -26,16 +26,6 @@ from pathlib import Path
 
 from signorini.pipeline import paths
 
-# what the report calls each target, and the command that computes it
-STUDIES = {
-    "all": ("paper (Tables 1-2, Figures 2-3)", "make all"),
-    "true_norms": ("true norms", "snakemake -c2 true_norms"),
-    "fine": ("Table 2 to h = 1/4001", "snakemake -c2 fine"),
-    "theory": ("theory scene", "snakemake -c2 theory"),
-    "work_precision": ("work-precision study", "snakemake -c2 work_precision"),
-    "stability": ("stability atlas", "snakemake -c2 stability"),
-}
-
 CSS = """
 body { font-family: -apple-system, "Segoe UI", Helvetica, Arial, sans-serif; font-size: 14px;
        line-height: 1.45; color: #222; margin: 1.2em 1.6em; max-width: 72em; }
@@ -192,7 +182,7 @@ class Study:
 
     @property
     def status(self) -> str:
-        name, command = STUDIES[self.target]
+        name, command = paths.TARGET_RULES[self.target].title, paths.TARGET_RULES[self.target].command
         if not self.rules:
             return f"{name}: not in the report, nothing built (`{command}`)"
         if self.built_here:

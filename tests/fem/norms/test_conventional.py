@@ -25,11 +25,12 @@ from signorini.fem.norms.conventional import (
     parse_norm,
 )
 from signorini.fem.norms.conventions import MAX_POINTS, QUADRATURES, W1P_FORMS
+from signorini.fem.problem import ProblemBase
 
 PAPER_NORMS = ["L4", "L16", "Linf", "W14", "W116", "W1inf", "H12"]
 
 
-class Linear:
+class Linear(ProblemBase):
     """u(x) = a0 + a1 x₁ + a2 x₂."""
 
     def __init__(self, a0: float, a1: float, a2: float):
@@ -42,7 +43,7 @@ class Linear:
         return np.stack([np.full(x.shape[1:], self.a[1]), np.full(x.shape[1:], self.a[2])])
 
 
-class Quadratic:
+class Quadratic(ProblemBase):
     """u(x) = x₁ (1 − x₁): maximum 1/4 on the line x₁ = 1/2."""
 
     def u(self, x):

@@ -23,13 +23,13 @@ from signorini.fem.norms.conventional import Conventions, boundary_error, evalua
 from signorini.fem.norms.families import define
 from signorini.fem.norms.names import UnknownNormError, parse_norm_name, true_name
 from signorini.fem.norms.true import RTOL, true_norm
-from signorini.fem.problem import Problem
+from signorini.fem.problem import Problem, ProblemBase
 from signorini.published import label_md
 
 X0 = 0.5 + 0.3 / 7  # inside a bottom boundary edge of the N = 7 mesh, not at its midpoint
 
 
-class Kink:
+class Kink(ProblemBase):
     """u = max(a − x₁, 0)^{3/2}: ``∂_t u`` has a square-root kink at x₁ = a on the bottom and top edges."""
 
     def __init__(self, a: float, declared: bool = True):
@@ -52,7 +52,7 @@ class Kink:
         return l2, 2.25 * a**2  # ∫ (3/2)² (a − x₁) on the bottom and top edges
 
 
-class Harmonic:
+class Harmonic(ProblemBase):
     """ũ = −Im z^{3/2}, z = (x₁ − x0) + i x₂: u ~ r^{3/2}, ∇u ~ r^{1/2} at P = (x0, 0); no cut-off."""
 
     def __init__(self, x0: float = X0):
@@ -226,7 +226,7 @@ def test_true_l2_norm_with_a_nonzero_p1_part():
     assert result.value == pytest.approx(math.sqrt(polar_integral(terms)), rel=RTOL)
 
 
-class Scaled:
+class Scaled(ProblemBase):
     """A·u of another exact solution (linear: every norm of u − A·u_h is A times that of u − u_h)."""
 
     def __init__(self, base, amplitude: float):
@@ -309,7 +309,7 @@ def test_true_maxima_of_the_singular_function(name):
     assert result.value == pytest.approx(_boundary_max(f), rel=1e-9)
 
 
-class Bump:
+class Bump(ProblemBase):
     """u = 1 − |x − c|², maximum 1 at c inside a triangle, |∇u| = 2 |x − c|."""
 
     c = np.array([0.4137, 0.2719])
@@ -370,6 +370,9 @@ def test_true_tables_stage_renders_convention_true_and_printed_values(tmp_path):
 class BoundedHarmonic(Harmonic):
     """ũ with the bounds of its derivatives: ‖D²ũ‖₂ = (3/4) r^{-1/2}, ∇ũ Hölder-1/2 with H = 3/2."""
 
+    def derivative_bounds(self):
+        return self
+
     def hessian_bound(self, r_lo, r_hi):
         with np.errstate(divide="ignore"):
             return 0.75 / np.sqrt(np.asarray(r_lo, dtype=float))
@@ -378,7 +381,7 @@ class BoundedHarmonic(Harmonic):
         return np.full(np.shape(r_hi), 1.5)
 
 
-class Understated:
+class Understated(ProblemBase):
     """A problem that states ``factor`` times its bounds (too small ones for factor < 1)."""
 
     def __init__(self, base, factor: float):
@@ -392,6 +395,9 @@ class Understated:
 
     def singular_points(self):
         return self.base.singular_points()
+
+    def derivative_bounds(self):
+        return self
 
     def hessian_bound(self, r_lo, r_hi):
         return self.factor * derivative_bounds(self.base).hessian_bound(r_lo, r_hi)

@@ -10,7 +10,7 @@ from skfem import LinearForm
 from signorini.fem.assembly import p1_basis, system_matrix
 from signorini.fem.discrete import build
 from signorini.fem.mesh import friedrichs_keller
-from signorini.fem.problem import Problem
+from signorini.fem.problem import Problem, ProblemBase
 from signorini.fem.solve import solve_discrete
 from signorini.solvers.linalg import factorize
 from signorini.studies.theory.quantities import (
@@ -25,7 +25,7 @@ from signorini.studies.theory.quantities import (
 )
 
 
-class _Linear:
+class _Linear(ProblemBase):
     """u = 1 + 2 x₁ - x₂ with reaction c: its Ritz projection is its interpolant."""
 
     c = 1.5
@@ -120,7 +120,7 @@ def test_supercloseness_vanishes_for_the_ritz_projection():
     assert supercloseness(problem, mesh, ritz_projection(problem, mesh)) < 1e-12
 
 
-class _BoundaryMode:
+class _BoundaryMode(ProblemBase):
     """u = cos(ω s) with s the arc length along ∂Ω (counter-clockwise from (0, 0)), ω = 2πk/4."""
 
     def __init__(self, k: int):

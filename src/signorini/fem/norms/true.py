@@ -499,10 +499,7 @@ def _bounded(problem) -> bool:
     """Whether the derivatives of u are bounded (``fem.derivatives.derivative_bounds``: the second
     derivatives; with a singular point also the Hölder constant of ∇u), so that the maxima can
     exclude triangles; at most one singular point."""
-    bounds, points = derivative_bounds(problem), singular_points(problem).shape[1]
-    if bounds is None or points > 1:
-        return False
-    return points == 0 or callable(getattr(bounds, "gradient_holder_bound", None))
+    return derivative_bounds(problem) is not None and singular_points(problem).shape[1] <= 1
 
 
 def _interpolation_radius(v: np.ndarray) -> np.ndarray:

@@ -10,7 +10,6 @@ import math
 import os
 import time
 from collections.abc import Mapping, Sequence
-from dataclasses import replace
 from typing import TYPE_CHECKING
 
 from signorini.fem.norms.conventions import Conventions
@@ -73,7 +72,7 @@ def algebraic_uncertainties(
     """{norm: the norm of the algebraic error ``δ`` (a P1 function: the error of ``-δ`` against
     ``u ≡ 0``) that bounds how far round-off can move the value of ``norm``, and the uncertainty
     recorded}; the norms of ``δ`` are evaluated together (one error field)."""
-    zero = replace(at.problem, A=0.0)  # u ≡ 0, same free point: the same boundary pieces
+    zero = at.problem.vanishing()  # u ≡ 0 on the same boundary pieces
     names = {norm_name(norm).name: uncertainty_norm(norm) for norm in norms}
     values = evaluate_named_norms(zero, mesh, -delta, list(dict.fromkeys(names.values())), conv)
     return {

@@ -42,7 +42,7 @@ def solve_stage(
     t1 = time.perf_counter()
     result = solve_discrete(disc, solver=solver, **dict(solver_options or {}))
     t2 = time.perf_counter()
-    route = "multigrid" if exact_route(solver, b.size) == "multigrid" else "active_set"
+    route = exact_route(solver, b.size)  # the direct route's factorisation for any route but multigrid
     algebraic = linearised_error(A, b, boundary, result.u, result.lam, result.active, route, result.hierarchy)
     result.hierarchy = None  # its memory, before the archive is written
     log.info(

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from signorini.fem.mesh import friedrichs_keller, mesh_width
-from signorini.fem.problem import Problem
+from signorini.fem.problem import ExactProblem, make_problem
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz, npz_provenance
 from signorini.pipeline.integrity import table_defect
 
@@ -42,8 +42,8 @@ class SceneMesh:
         return cls(dict(job.params.problem), int(job.wildcards.N), str(job.params.diagonal))
 
     @property
-    def problem(self) -> Problem:
-        return Problem.from_params(self.problem_params)
+    def problem(self) -> ExactProblem:
+        return make_problem(self.problem_params)
 
     @property
     def h(self) -> float:
@@ -63,9 +63,9 @@ class SceneMesh:
         if "diagonal" in sol and str(sol["diagonal"]) != self.diagonal:
             raise CorruptArtifactError(f"{solution_npz}: solved with diagonal {sol['diagonal']}, not {self.diagonal}")
         recorded = (npz_provenance(sol) or {}).get("params", {}).get("problem")
-        if recorded is not None and Problem.from_params(recorded) != self.problem:
+        if recorded is not None and make_problem(recorded) != self.problem:
             raise CorruptArtifactError(
-                f"{solution_npz}: solves the problem {Problem.from_params(recorded).as_dict()}, "
+                f"{solution_npz}: solves the problem {make_problem(recorded).as_dict()}, "
                 f"not {self.problem.as_dict()}"
             )
         return sol

@@ -146,10 +146,10 @@ def _parse_norms(block: Mapping, scene: Mapping, where: str) -> tuple[str, ...]:
 
 def _case_problem(raw: Mapping, base: Mapping, at: str) -> dict:
     """The case's problem: merged over the scene's for the manufactured kind; checked."""
-    from signorini.fem.problem import ProblemParameterError, make_problem
+    from signorini.fem.problem import DEFAULT_KIND, ProblemParameterError, make_problem
 
     own = dict(raw.get("problem") or {})
-    if own.get("kind", "manufactured") == "manufactured":  # over the scene's problem
+    if own.get("kind", DEFAULT_KIND) == DEFAULT_KIND:  # over the scene's problem
         params = {**base, **own}
         params.pop("kind", None)
     else:
