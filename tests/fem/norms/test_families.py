@@ -24,6 +24,7 @@ from signorini.fem.norms.families import (
     part,
 )
 from signorini.fem.norms.names import parse_norm_name
+from signorini.fem.problem import ProblemBase
 
 
 @pytest.mark.parametrize("form", W1P_FORMS)
@@ -79,7 +80,7 @@ def test_the_parts_and_their_magnitudes_pointwise():
         np.testing.assert_array_equal(magnitude(name, e, de), size)
 
 
-class Linear:
+class Linear(ProblemBase):
     """u(x) = a1 x₁ + a2 x₂ (no singular point)."""
 
     def __init__(self, a1: float, a2: float):
