@@ -11,7 +11,8 @@ Where the notebooks look:
   default: the repository this package was installed from (editable install), else the
   first parent of the working directory that holds a ``Snakefile``.
 - ``SIGNORINI_SCENE``: the scene to read; default ``paper`` if its ``errors.csv`` and
-  ``eoc.csv`` exist, else ``smoke`` (built with Snakemake if it is missing, about 30 s).
+  ``eoc.csv`` exist, else ``smoke`` (built with Snakemake if it is missing, which is quick:
+  docs/evidence/design-measurements.md#smoke-scene).
 """
 
 from __future__ import annotations

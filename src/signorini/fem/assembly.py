@@ -47,7 +47,8 @@ def p1_basis(mesh: MeshTri, intorder: int = INTORDER) -> Basis:
     return Basis(mesh, ElementTriP1(), intorder=intorder)
 
 
-CHUNK_ELEMENTS = 1 << 17  # triangles per assembly chunk: bounds the quadrature data to ~0.5 GiB
+# triangles per assembly chunk: bounds the quadrature data (docs/evidence/design-measurements.md#chunk-sizes)
+CHUNK_ELEMENTS = 1 << 17
 
 
 def _mesh_and_quadrature(target: Basis | MeshTri, intorder: int) -> tuple[MeshTri, tuple[np.ndarray, np.ndarray]]:
@@ -206,7 +207,8 @@ def _local_matrices(p: np.ndarray, t: np.ndarray, c: float, intorder: int = 2) -
 # else by translation.  ``_row_templates`` finds each class's triplet sequence on the mesh, and
 # ``_sort_order`` asks scipy itself for the order in which it sums a sequence of keys.
 
-STENCIL_BAND = 64  # grid lines of vertices per band: bounds the working memory to ~100 MB at N = 4001
+# grid lines of vertices per band: bounds the working memory (docs/evidence/design-measurements.md#chunk-sizes)
+STENCIL_BAND = 64
 
 
 def _sort_order(keys: tuple[int, ...]) -> np.ndarray:

@@ -9,7 +9,8 @@ editing any module a job can run re-runs that job, and nothing else.
 
 Every Snakemake process parses the Snakefile, including each job a cluster runs; ``ImportCache``
 keeps each file's direct imports on disk, keyed by the digest of its content, so that a process
-parses only the files that changed (reading and hashing a file costs a tenth of parsing it).
+parses only the files that changed (reading and hashing a file costs a fraction of parsing it:
+docs/evidence/design-measurements.md#import-cache).
 """
 
 from __future__ import annotations

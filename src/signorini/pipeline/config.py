@@ -78,8 +78,8 @@ def load_yaml(path: str | Path) -> dict:
 @cache
 def _unique_key_loader():
     """yaml's SafeLoader refusing a key given twice in one mapping, with the line of each (on
-    libyaml's parser where PyYAML has it: a tenth of the pure-Python parser's time, which a
-    workflow start pays for every config and schema file)."""
+    libyaml's parser where PyYAML has it: a fraction of the pure-Python parser's time, which a
+    workflow start pays for every config and schema file; docs/evidence/design-measurements.md#yaml-parser)."""
     import yaml
 
     class UniqueKeyLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
@@ -229,7 +229,8 @@ def validate_config(config: dict, schema: str | Path = SCHEMA, memo: str | Path 
     ``memo``: a file holding the last valid config with its defaults, keyed by the SHA-256 of the
     config as given, the schema and this module; the same key gives the same result, so a
     Snakemake call with an unchanged config takes it from there instead of importing jsonschema
-    and validating again (a third of a second of every workflow start)."""
+    and validating again, a noticeable part of every workflow start
+    (docs/evidence/design-measurements.md#config-memo)."""
     key = _memo_key(config, schema)
     if memo is not None and key is not None and (known := _recall(memo, key)) is not None:
         config.clear()
@@ -439,9 +440,9 @@ def energy_of_u1(R: float, c: float) -> float:
 def energy_ceiling(R: float, c: float) -> float:
     """The largest amplitude whose energy ``A² a(u₁, u₁)`` (``energy_of_u1``) is a finite double:
     conjugate gradients (the multigrid route, the theory scene's Ritz projection) and the H¹ norms
-    of P1 functions compute such energies as plain sums, and break down beyond it (measured: the
-    multigrid route fails from 1.0003 to 1.06 times this bound on, for N = 41 to 201, R = 0.1 to
-    0.45, c = 0 to 1e4; the discrete energy approaches a(u, u) from below)."""
+    of P1 functions compute such energies as plain sums, and break down beyond it: the multigrid
+    route fails just above this bound, which the discrete energy approaches from below
+    (docs/evidence/design-measurements.md#energy-ceiling)."""
     return math.sqrt(sys.float_info.max) / math.sqrt(energy_of_u1(R, c) * (1.0 + 16 * sys.float_info.epsilon))
 
 
@@ -476,11 +477,12 @@ def check_amplitude(field: str, A: float, R: float, Ns: Sequence[int], c: float 
         )
 
 
-# The support of u must span this many cells of the coarsest mesh (R·N ≥ 3).  Measured with the
-# paper's norms and the one-sided L4plus/L4minus on N = 11, 21, 41 (x0 = 0.5 and 0.37): below one
-# cell the error or a one-sided part of it vanishes (no node in the support: u_h does not see u) or
-# grows on refinement; at one cell an EOC is still negative (L4plus); from about two cells every EOC
-# is positive, and at three they approach the asymptotic orders.  Every shipped scene has R·N ≥ 4.95.
+# The support of u must span this many cells of the coarsest mesh (R·N ≥ 3).  With the paper's
+# norms and the one-sided L4plus/L4minus on coarse meshes: below one cell the error or a one-sided
+# part of it vanishes (no node in the support: u_h does not see u) or grows on refinement; at one
+# cell an EOC is still negative (L4plus); from about two cells every EOC is positive, and at three
+# they approach the asymptotic orders.  Every shipped scene has a wider support
+# (docs/evidence/design-measurements.md#support-cells).
 SUPPORT_CELLS = 3
 
 

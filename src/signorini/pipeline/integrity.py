@@ -321,7 +321,8 @@ def judge(planned: Sequence[Planned], environment: Mapping) -> Verdicts:
 def _committed_and_costly(out: Planned, prov: Mapping | None) -> bool:
     """A committed rendered output (no record of a run here) whose job's inputs are not all in the
     cache: rendering it anew would recompute them (the work-precision study's measurements take
-    hours), so it is kept as the committed result; ``make check`` says it was not rendered here."""
+    long: docs/evidence/design-measurements.md#committed-study-outputs), so it is kept as the
+    committed result; ``make check`` says it was not rendered here."""
     return is_rendered(out.path) and not prov and not all(os.path.exists(p) for p in out.inputs)
 
 

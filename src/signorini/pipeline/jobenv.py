@@ -2,8 +2,9 @@
 
 One BLAS/OpenMP/Rayon thread unless the caller says otherwise (``THREAD_VARIABLES`` already set are
 kept): jobs run side by side (``snakemake -c2``), and threaded BLAS inside the active-set loop
-oversubscribes the cores (5-20× slower on a loaded 2-core machine); a timed run then measures the
-CPU time of one core, as the PETSc peers' runs do.  It must be applied before numpy loads its BLAS:
+oversubscribes the cores, many times slower on a loaded machine
+(docs/evidence/design-measurements.md#one-thread-per-job); a timed run then measures the CPU time
+of one core, as the PETSc peers' runs do.  It must be applied before numpy loads its BLAS:
 the Snakefile applies it once for the workflow process and every job it starts (they inherit the
 environment); an entry point outside the workflow (a benchmark, the tests) applies it first thing.
 This module imports nothing but ``os``.
@@ -15,10 +16,11 @@ import os
 from collections.abc import MutableMapping
 
 # RAYON: the thread pool of Clarabel's sparse factorisation (faer); without it a Clarabel call
-# ran 1.16 cores wide and 37 % slower in wall time at N = 201 on 2 cores.
+# ran wider than one core and slower in wall time.
 # OMP_THREAD_LIMIT: CHOLMOD's supernodal factorisation (Debian's, under the PETSc peers) asks for
-# 4 OpenMP threads whatever OMP_NUM_THREADS says; on 2 cores vinewtonrsls + CHOLMOD then took
-# 2.3-3.1 s of CPU at N = 201 (a quarter of it system time, 67 000 thread hand-overs), one thread 1.47 s
+# 4 OpenMP threads whatever OMP_NUM_THREADS says; on 2 cores vinewtonrsls + CHOLMOD then took more
+# CPU time than with one thread, much of it system time and thread hand-overs.
+# (docs/evidence/design-measurements.md#one-thread-per-job)
 THREAD_VARIABLES = (
     "OMP_NUM_THREADS",
     "OMP_THREAD_LIMIT",

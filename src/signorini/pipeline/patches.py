@@ -46,7 +46,8 @@ def _require(owner: Any, name: str, why: str) -> Any:
 # that starts another round one rate-limit timespan later; a round started by a finished job starts
 # a timer of its own, so after n finished jobs n timer chains run (snakemake/snakemake#3744, #2967).
 # Each round resets the params and resources of every ready job and stats its inputs (code inputs
-# included): the main process took a third of a core late in a long run (docs/evidence/).
+# included): late in a long run the main process took a sizeable share of a core
+# (docs/evidence/design-measurements.md#one-reevaluation-timer).
 
 _LOCK = threading.Lock()
 _PENDING = "_signorini_reevaluation_pending"

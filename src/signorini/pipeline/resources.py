@@ -1,13 +1,10 @@
 """Memory and run-time requests of the per-mesh jobs, defined once: the rules' ``resources`` and
 the config check's bound use them.  Memory grows with the number of unknowns, (N + 1)² ≈ N²; the
-constants follow the peaks measured at N = 2001 (``docs/evidence/scale.json``: discretise
-0.9 GiB, solve 7.3 GiB by the direct route and 1.8 GiB by the multigrid route (6.9 GiB at
-N = 4001), a mesh's 20 convention norms in one job 1.9 GiB, theory_quantities 2.3 GiB, its Ritz
-projection by multigrid CG) with some headroom; a solve
-job's request follows the route its scene's solver takes on that mesh.  Run times at N = 2001
-on a loaded 2-CPU machine (load about 4): discretise 130 s, solve 216 s, a norm 20–80 s,
-theory_quantities 228 s; the requests are about ten times these, since a job that outlives its
-request is killed."""
+constants follow the peak memory of each stage at N = 2001 (``docs/evidence/scale.json``, per stage
+and mesh; the theory quantities with their Ritz projection by multigrid CG) with some headroom; a
+solve job's request follows the route its scene's solver takes on that mesh.
+The run-time requests are generous multiples of the run times on a loaded machine, since a job
+that outlives its request is killed (docs/evidence/design-measurements.md#job-requests)."""
 
 from __future__ import annotations
 
@@ -32,9 +29,11 @@ MEM_MB = {
 }
 RUNTIME_MIN = {
     "discretise": (5, 200000),
-    "solve": (5, 100000),  # the active-set steps grow with N: N = 1001 -> 2001 took 8x
+    # the active-set steps grow faster than N² (docs/evidence/design-measurements.md#job-requests)
+    "solve": (5, 100000),
     "norm": (5, 500000),
-    "true_norm": (5, 250000),  # a true norm: at most about twice a convention norm (branch and bound, pruning)
+    # a true norm: twice a convention norm's request (branch and bound, pruning; the same page)
+    "true_norm": (5, 250000),
     "theory_quantities": (5, 100000),
 }
 SCENE_RULES = ("discretise", "solve", "norm")  # the jobs every scene runs on each mesh

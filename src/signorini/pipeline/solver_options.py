@@ -3,9 +3,10 @@
 A configuration's solver options (a scene's ``solver_options``, a work-precision configuration's
 ``options``, an atlas column's ``options``) are checked at parse time, every Snakemake call, so
 nothing here imports a solver: the routes' own options are declared in ``signorini.solvers.routes``
-(tied to their signatures by its tests), Clarabel's settings are read from its extension (about
-1 ms), and OSQP's and SCS's from the tables below (importing OSQP pulls in ``scipy.sparse``, about
-0.5 s; SCS names its settings nowhere but in its documentation).
+(tied to their signatures by its tests), Clarabel's settings are read from its extension (cheap),
+and OSQP's and SCS's from the tables below (importing OSQP pulls in ``scipy.sparse``, which is not;
+SCS names its settings nowhere but in its documentation; the costs:
+docs/evidence/design-measurements.md#solver-options-without-imports).
 ``tests/pipeline/test_solver_options.py`` checks both tables against the installed packages.
 """
 

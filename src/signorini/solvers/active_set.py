@@ -148,11 +148,12 @@ class DirectSystems:
 
     def refine(self, u: np.ndarray) -> np.ndarray:
         """One step of iterative refinement on the last free set, always.  The direct solve's
-        error is smooth (Cholesky's backward error times ``Ã⁻¹``: 1.2e-13 max |u| at N = 201,
-        6e-13 at N = 501 against a long-double-refined solution, growing like N²), and a smooth
-        error has a residual below the rounding noise ``ε |A||u|`` of evaluating it, so no residual
-        test can tell when to refine.  One step leaves ``Ã⁻¹`` of that noise, which is rough and
-        damped: 4e-15 max |u| at N = 201.  Clamped rows have zero residual: u_𝒜 stays 0."""
+        error is smooth (Cholesky's backward error times ``Ã⁻¹``, growing like N² against a
+        long-double-refined solution), and a smooth error has a residual below the rounding noise
+        ``ε |A||u|`` of evaluating it, so no residual test can tell when to refine.  One step leaves
+        ``Ã⁻¹`` of that noise, which is rough and damped: a few units of round-off of max |u|
+        (docs/evidence/design-measurements.md#direct-refinement).  Clamped rows have zero residual:
+        u_𝒜 stays 0."""
         residual = np.where(self.free, self.b - self.A @ u, 0.0)
         return u + self.bordered(self.free, residual)
 

@@ -16,13 +16,14 @@ Rounding floor.  ``A u - b`` cannot be evaluated more accurately than about
 ``ε (|A||u|)_i`` per row (ε the unit round-off); the rounded *exact* solution has a residual
 of that size.  When ``A u`` cancels (smooth data: ``u ≡ 1`` gives ``K u = 0``, so
 ``σ = ‖b‖∞ = O(h²)`` while ``|A||u| = O(1)``), the load-relative stationarity of even the
-best double-precision solution is ``≈ ε ‖|A||u|‖∞ / σ = O(ε/h²)`` (7e-11 at N = 201, 1.8e-9 at
-N = 1001 for ``f ≡ 1, c = 1``; a plain Cholesky solve left 5.6e-10 and 5.8e-8: stability
-atlas), above any 1e-10 tolerance.  The certificate therefore
+best double-precision solution is ``≈ ε ‖|A||u|‖∞ / σ = O(ε/h²)`` (for ``f ≡ 1, c = 1``, with
+what a plain Cholesky solve left: docs/evidence/design-measurements.md#certificate-rounding-floor),
+above any 1e-10 tolerance on fine meshes.  The certificate therefore
 accepts residuals up to ``max(tol, min(floor, 1e-6))`` with ``floor = 16 ε ‖|A||u|‖∞ / σ`` (16
 covers the 7 products of a P1 row and the rounding of u itself; the cap keeps an exploded ``u``
 of a singular system from certifying itself).  For the paper's data the floor is
-far below 1e-10 (1.6e-12 at N = 501, growing like N²).  ``tol = 0`` demands exact zeros (no floor).
+far below 1e-10, growing like N² (``floor`` in ``docs/evidence/core_N501.json`` and
+``core_N2001_memory.json``).  ``tol = 0`` demands exact zeros (no floor).
 """
 
 from __future__ import annotations

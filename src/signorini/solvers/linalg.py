@@ -4,19 +4,18 @@ Backends, in the order ``prefer="auto"`` tries them:
 
 - ``cholmod``: supernodal CHOLMOD as bundled (with OpenBLAS) in ``cvxopt``'s wheels;
   a ``Factorizer`` runs the symbolic analysis (AMD ordering) once per sparsity pattern and
-  refactorises numerically only.  At N = 501: analysis 0.15 s, numerical factorisation
-  0.4 s.  (``cholespy`` runs CHOLMOD simplicial, 3.3 s; its fork ``sksparse-minimal`` runs
-  it supernodal on reference BLAS, 1.15 s; ``benchmarks/core.py``);
-- ``pardiso``: MKL PARDISO through ``pypardiso`` (wheels, ~1 GB with MKL; optional,
+  refactorises numerically only.  (``cholespy`` runs CHOLMOD simplicial and its fork
+  ``sksparse-minimal`` runs it supernodal on reference BLAS: both factorise slower);
+- ``pardiso``: MKL PARDISO through ``pypardiso`` (large wheels with MKL; optional,
   not in environment.lock), real SPD mode; a ``Factorizer`` analyses the sparsity
-  pattern once and refactorises numerically only.  At N = 501 its factorisation is
-  faster (2.1 s vs 2.7 s) but its solves are slower, and the whole active-set solve
-  took 5.0 s against (simplicial) CHOLMOD's 4.5 s, with a large fixed cost per call
-  on small meshes;
+  pattern once and refactorises numerically only.  Its factorisation is faster but its
+  solves are slower, and the whole active-set solve took longer than with (simplicial)
+  CHOLMOD, with a large fixed cost per call on small meshes;
 - ``superlu``: SciPy's SuperLU in symmetric mode, always available; a logged
   notice says when the faster backends are missing.
 
-Measured figures are in ``results/benchmarks/`` (``benchmarks/core.py``).
+The figures behind this order: docs/evidence/design-measurements.md#factorisation-backends;
+``benchmarks/core.py`` measures them anew (``results/benchmarks/``).
 """
 
 from __future__ import annotations

@@ -9,9 +9,9 @@ where the direct route factorises (fill-in; time growing like n^1.5).  What make
   hierarchy halves that grid (``coarse_lines``: every other line, the last one kept, so odd N
   nests too) with the P1 interpolation between the meshes (``fk_transfer``) down to the coarsest
   level: Galerkin operators of 7 to 9 entries per row and an operator complexity of 4/3, set up
-  in a fraction of classical AMG's time (N = 2001: 2.3 s against 8.3 s, complexity 1.33 against
-  2.4, 31 CG iterations for the whole solve against 45).  Any other matrix takes classical
-  (Ruge–Stüben) AMG.
+  in a fraction of classical AMG's time, with a smaller complexity than classical AMG's and fewer
+  CG iterations for the whole solve (docs/evidence/design-measurements.md#multigrid-geometric-hierarchy).
+  Any other matrix takes classical (Ruge–Stüben) AMG.
 
 - **One hierarchy for every active set.**  Only boundary nodes are ever clamped, so the
   hierarchy's transfer operators are built once, for ``A`` itself (every node free), and kept.
@@ -22,35 +22,35 @@ where the direct route factorises (fill-in; time growing like n^1.5).  What make
   (at most ``max_coarse`` unknowns) is refactorised densely.  Galerkin coarse operators with a
   convergent smoother give a convergent, symmetric positive definite V-cycle whatever the
   transfers, and the transfers of ``A`` serve every set about as well as a fresh hierarchy
-  (N = 201, classical AMG, CG to 1e-14 from zero: 16 iterations for the final, the empty, the full and
-  the cold start's contact sets, against 11–14 with a hierarchy built for each set).  A
-  hierarchy built for one clamped set instead, reused unchanged for another, costs about one
-  and a half CG iterations per node that changed status.
+  (a few CG iterations more, for the final, the empty, the full and the cold start's contact sets
+  alike).  A hierarchy built for one clamped set instead, reused unchanged for another, costs CG
+  iterations for every node that changed status (docs/evidence/design-measurements.md#multigrid-one-hierarchy).
 - **Inexact solves while the set moves.**  CG stops at the energy-relative accuracy
   ``inner_rtol``, and at least ``STEP_REDUCTION`` below where the step started (a change of a
   few nodes moves the global energy by less than ``inner_rtol`` but the nodes next to it, whose
   status is decided next, a lot).  A set that repeats is solved again to ``tol`` and tested once
-  more (``pdas.iterate``).  Looser inner solves do not pay: at N = 501 from the cascade,
-  ``inner_rtol`` = 1e-6 misjudges nodes (47 Newton steps without ``STEP_REDUCTION``, 7 and 45
-  CG iterations with it) where 1e-8 takes 6 steps and 35 iterations.  A tenfold reduction per
-  step suffices: against a thousandfold, the same Newton steps and contact sets at N = 101 to
-  2001 and on stiff, large-amplitude, off-centre and cold-started cases, with fewer CG
-  iterations (N = 2001: 21 against 31).
+  more (``pdas.iterate``).  Looser inner solves do not pay: ``inner_rtol`` = 1e-6 misjudges nodes
+  (many Newton steps without ``STEP_REDUCTION``, more CG iterations with it than 1e-8 takes).  A
+  tenfold reduction per step suffices: against a thousandfold, the same Newton steps and contact
+  sets on the paper's problem from coarse to fine meshes and on stiff, large-amplitude, off-centre
+  and cold-started cases, with fewer CG iterations
+  (docs/evidence/design-measurements.md#multigrid-inner-tolerance).
 - **Warm starts.**  Each solve starts from the previous Newton iterate, the first from the
   warm start (in the cascade of ``fem.solve`` the coarser mesh's interpolant): a step that
   changed a few nodes costs a few iterations.  Without a warm start the route makes its own
   (``nested_start``, nested iteration from ``A`` and ``b`` alone): the problem restricted to the
   hierarchy's first coarse grid, solved the same way, prolongated.  The plain cold start grows
-  the contact set by a node per Newton step (N = 501: 46 steps, 267 CG iterations, 8.5 s); the
-  nested one takes 9 steps and 29 iterations, 2.1 s.
+  the contact set by a node per Newton step; the nested one takes a fraction of its steps, CG
+  iterations and time (docs/evidence/design-measurements.md#multigrid-nested-start).
 
 Stopping test.  With ``M ≈ Ã⁻¹`` the preconditioned residual ``√(rᵀMr)`` estimates the energy
 norm of the error ``‖e‖_Ã``, and ``xᵀDb`` estimates ``‖u‖²_Ã``; CG stops when
-``√(rᵀMr) ≤ rtol √(xᵀDb)``.  On the paper's problem (N = 201, 501, against a solution refined
-with long-double residuals) this ratio follows the max-norm relative error within a factor of
-two down to about 1e-14, where double precision ends: ``tol = 1e-14`` gives errors of about
-1e-14 max |u|.  (A max-norm residual test cannot do this: the rounding noise ``ε |A||u|`` of
-evaluating the residual hides the smooth error components, which dominate the error.)  After
+``√(rᵀMr) ≤ rtol √(xᵀDb)``.  On the paper's problem (against a solution refined with long-double
+residuals) this ratio follows the max-norm relative error closely down to about 1e-14, where
+double precision ends: ``tol = 1e-14`` gives errors of about 1e-14 max |u|
+(docs/evidence/design-measurements.md#multigrid-stopping-test).  (A max-norm residual test cannot
+do this: the rounding noise ``ε |A||u|`` of evaluating the residual hides the smooth error
+components, which dominate the error.)  After
 an accurate solve the true residual is compared with that rounding floor, and CG is restarted
 from its iterate (iterative refinement) if the recurrence has drifted from it.
 

@@ -104,9 +104,8 @@ QP_OPTION = "qp_solver"  # the option naming the QP solver of the ``cvxpy`` rout
 DEFAULT_QP_SOLVER = "CLARABEL"
 QP_SHORTHANDS = ("clarabel", "osqp", "scs")  # the cvxpy_<QP solver> names the config schema lists
 # ``auto`` takes the multigrid route from this many unknowns on (N ≈ 345): the crossover of the
-# two routes on the paper's problem with the cascade and the geometric hierarchy, measured side by
-# side in one process on one thread at N = 201 to 451 (CPU seconds, two runs each: even at 201
-# and 301 within the runs' spread, multigrid ahead at 351, ×1.6 at 401 and ×1.9 at 451)
+# two routes on the paper's problem with the cascade and the geometric hierarchy, timed side by
+# side (docs/evidence/design-measurements.md#multigrid-crossover)
 MULTIGRID_FROM_UNKNOWNS = 120_000
 
 SOLVERS = (*ROUTES, AUTO)  # the routes by their names, and the choice between the exact ones

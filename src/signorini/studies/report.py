@@ -5,11 +5,12 @@ Snakemake's report shows an HTML file inline (in a frame) and any other text fil
 download link, so every Markdown output (Tables 1-2, the reproduction report, the studies'
 findings) gets a page: the same Markdown, rendered to HTML (``markdown_page``), by the rules of
 ``workflow/rules/report.smk``.  A page is rendered from the file as it is, whoever wrote it: a
-committed output whose measurements are not in ``results/`` (the theory study takes an hour) is
-shown without being recomputed.  ``plan`` says per study whether its outputs were computed from
-this machine's cached results ("built here", which needs those results intact), hold the bytes of
-the repository's committed files (git's ``HEAD``), differ from them, or are missing, and lists the
-report's targets; a damaged cached table is left out of the report, with one line naming it.
+committed output whose measurements are not in ``results/`` (a study takes long to compute:
+docs/evidence/design-measurements.md#committed-study-outputs) is shown without being recomputed.
+``plan`` says per study whether its outputs were computed from this machine's cached results
+("built here", which needs those results intact), hold the bytes of the repository's committed
+files (git's ``HEAD``), differ from them, or are missing, and lists the report's targets; a
+damaged cached table is left out of the report, with one line naming it.
 """
 
 from __future__ import annotations

@@ -40,7 +40,8 @@ from signorini.fem.norms.names import NormName, UnknownNormError, norm_name
 from signorini.fem.problem import Problem
 from signorini.fem.quadrature import dunavant8, stroud_conical
 
-if TYPE_CHECKING:  # scikit-fem costs 0.5 s to import; only type hints need it here
+# scikit-fem is slow to import (docs/evidence/design-measurements.md#lazy-imports); only type hints need it here
+if TYPE_CHECKING:
     from skfem import MeshTri
 
 BOUNDARY_POINTS = 8  # Gauss–Legendre points per piece of a boundary edge (fem.boundary)
@@ -161,8 +162,9 @@ def p1_at_points(
     """Points, ``u_h``, ``∇u_h`` and ``|det J|`` at reference points ``X`` (2, q) of every triangle.
 
     The affine P1 map written out (barycentrics λ = (1 - ξ - η, ξ, η)): scikit-fem's
-    ``CellBasis`` does the same in general but builds (3, 2, elements, q) basis arrays,
-    which at N = 501 costs 3 s and 1 GiB per rule; this costs 0.2 s.  Tested against
+    ``CellBasis`` does the same in general but builds (3, 2, elements, q) basis arrays, which
+    costs far more time and memory per rule than this (docs/evidence/design-measurements.md#p1-at-points).
+    Tested against
     ``CellBasis.interpolate`` in tests/fem/norms/test_conventional.py.
     """
     lam = np.vstack([1.0 - X[0] - X[1], X[0], X[1]])  # (3, q)
@@ -423,7 +425,9 @@ def _compute(field: ErrorField, norms: dict[str, NormDefinition]) -> dict[str, f
     return values
 
 
-CHUNK_ELEMENTS = 1 << 16  # triangles per evaluation chunk: its error field and shared powers take ~0.25 GiB
+# triangles per evaluation chunk: bounds its error field and shared powers
+# (docs/evidence/design-measurements.md#chunk-sizes)
+CHUNK_ELEMENTS = 1 << 16
 
 
 def _reduction(norm: NormDefinition) -> tuple[str, float]:

@@ -50,7 +50,8 @@ def _evaluate(at: SceneMesh, mesh, u_h, norms: list[NormName], conv: Conventions
 
 # The uncertainty of a value is this multiple of the same norm of the algebraic error δ: δ is the
 # first-order estimate from this run's KKT residual, and on another processor u_h moves by a
-# different round-off of the same size (measured: 200x below the estimate at N = 501)
+# different round-off of the same size, far below the estimate
+# (docs/evidence/design-measurements.md#uncertainty-safety)
 UNCERTAINTY_SAFETY = 10.0
 UNCERTAINTY_NOTE = (
     "|value - the same norm of u - u_h*| <= the norm of delta = u_h - u_h* (triangle inequality); "

@@ -290,7 +290,9 @@ def run_case(atlas: Atlas, case: Case) -> tuple[dict, dict[str, np.ndarray]]:
     if any(atlas.solvers[label].solver.startswith("cvxpy") for label in case.solvers):
         from signorini.solvers import installed_qp_solvers
 
-        installed_qp_solvers()  # import cvxpy and its solver interfaces once, before the forks (2-3 s each)
+        # import cvxpy and its solver interfaces once, before the forks: each child would pay the import
+        # again (docs/evidence/design-measurements.md#cvxpy-import-before-fork)
+        installed_qp_solvers()
     for label in case.solvers:
         spec = atlas.solvers[label]
         t1 = time.perf_counter()

@@ -6,7 +6,9 @@
   = ∫ ∇u·∇w + c u w``), its right-hand side from the exact ``u`` and ``∇u`` by quadrature over
   chunks of triangles, its system ``(K + c M) r = ...`` solved by conjugate gradients with the
   multigrid route's algebraic multigrid V-cycle (``ritz_solve``): time and memory in O(n), where
-  a sparse factorisation needs 5 GiB at N = 2001 and more than this machine at N = 4001.  It is
+  a sparse factorisation took more than twice the time and memory at N = 2001
+  (``docs/evidence/stage_jobs_N2001.json``, baseline against tree) and needs more than this
+  machine at N = 4001.  It is
   not the unconstrained problem with ``f``: ``u`` carries the boundary flux ``∂_n u``.
 - ``supercloseness``: ``‖R_h u - u_h‖_{H¹}``, Theorem 3.6 predicts ``O(h^{3/2-ε})``.
 - ``boundary_h12_norm``: the discrete interpolation norm ``vᵀ M (M⁻¹(K + M))^{1/2} v`` of
