@@ -7,7 +7,7 @@ work-precision study, timed once as the machine is and once with busy processes 
 Solvers (configurations of the shipped study, ``workflow/config.yaml``): our active set from
 the cascade (the reference of the ratios) and cold, OSQP, CLARABEL and SCS through cvxpy at
 ``--tol``, and, when petsc4py runs under ``--python``, the PETSc peers of ``--peers``.  Per mesh
-they are timed round-robin under the protocol of ``signorini.studies.work_precision.timing``
+they are timed round-robin under the protocol of ``signorini.timing``
 (``race.race``); then ``--busy`` processes (default 2; ``--busy-kind numpy``: streaming array
 updates and small matrix products, memory traffic as well as arithmetic; ``spin``: a Python
 loop) are started, the same slice is timed again, and they are stopped.
@@ -171,7 +171,7 @@ def main(argv: list[str] | None = None) -> int:
     from signorini.pipeline.artifacts import save_json
     from signorini.studies.work_precision.peers import probe
     from signorini.studies.work_precision.study import PEER_PYTHON
-    from signorini.studies.work_precision.timing import Protocol, Timer
+    from signorini.timing import Protocol, Timer
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--N", default="201,501", help="meshes, comma-separated")

@@ -16,7 +16,7 @@ import pandas as pd
 import pytest
 
 from signorini.studies.work_precision.study import INACCURATE
-from signorini.studies.work_precision.timing import spread
+from signorini.timing import spread
 
 REASONS = {"ok": "", "inaccurate": INACCURATE, "failed": "solver status infeasible"}
 

@@ -13,7 +13,7 @@ import pytest
 from helpers import ROOT
 
 from signorini.studies.work_precision.findings import findings, is_peer, pd_numeric, starts
-from signorini.studies.work_precision.timing import Protocol
+from signorini.timing import Protocol
 
 NORMS = ["L4", "W14"]
 

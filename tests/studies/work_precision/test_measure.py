@@ -221,17 +221,3 @@ def test_previous_failure_skips_the_run(small_study):
     recs = measure(small_study, {"solver": "NOSUCH"}, out="next.json", prev_json=small_study["dir"] / "prev.json")
     assert {r["status"] for r in recs} == {"skipped"}
     assert all(r["reason"].startswith("failed at N=12") for r in recs)
-
-
-def test_the_machine_record_reads_the_cpu_the_hypervisor_flag_and_the_threads(tmp_path):
-    cpuinfo = tmp_path / "cpuinfo"
-    cpuinfo.write_text("processor\t: 0\nmodel name\t: AMD EPYC\nflags\t\t: fpu sse2 hypervisor\n", encoding="utf-8")
-    product = tmp_path / "product_name"
-    product.write_text("KVM\n", encoding="utf-8")
-    record = wp.machine_record({OMP: "1"}, cpuinfo, product)
-    assert (record["cpu_model"], record["hypervisor"], record["product"]) == ("AMD EPYC", True, "KVM")
-    assert record["threads"][OMP] == "1" and record["threads"][OPENBLAS] == ""
-    cpuinfo.write_text("model name\t: Xeon\nflags\t\t: fpu sse2\n", encoding="utf-8")
-    assert wp.machine_record({}, cpuinfo, tmp_path / "missing")["hypervisor"] is False
-    unknown = wp.machine_record({}, tmp_path / "missing", tmp_path / "missing")
-    assert (unknown["cpu_model"], unknown["hypervisor"], unknown["product"]) == ("", None, "")

@@ -7,7 +7,7 @@ import math
 
 from signorini.studies.work_precision.race import REFERENCE, race
 from signorini.studies.work_precision.study import study_configs
-from signorini.studies.work_precision.timing import Protocol, Timer
+from signorini.timing import Protocol, Timer
 
 FAST = {"wait_s": 0.0, "retries": 0, "min_repeats": 1, "budget_s": 1.0}  # no waiting for a quiet machine
 

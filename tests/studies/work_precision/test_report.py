@@ -11,7 +11,7 @@ import pandas as pd
 from signorini.pipeline.jobenv import THREAD_VARIABLES
 from signorini.studies.work_precision.findings import findings
 from signorini.studies.work_precision.report import fmt_fit, fmt_ratio, fmt_timed, work_precision_md
-from signorini.studies.work_precision.timing import Protocol
+from signorini.timing import Protocol
 
 OMP, OPENBLAS = THREAD_VARIABLES[0], THREAD_VARIABLES[2]  # two of the variables jobenv names
 

@@ -28,7 +28,7 @@ from signorini.studies.work_precision import uncertainty as unc
 from signorini.studies.work_precision.selection import digits_unchanged, keeps_digits, printed, selected_tolerances
 from signorini.studies.work_precision.study import EXACT_LABEL, PEER_SOLVERS
 from signorini.studies.work_precision.table import tolerance_order
-from signorini.studies.work_precision.timing import Protocol
+from signorini.timing import Protocol
 
 if TYPE_CHECKING:
     import pandas as pd

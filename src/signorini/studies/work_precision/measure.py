@@ -7,7 +7,7 @@ What is measured, per mesh ``N`` and per *solver configuration* (``study_configs
   (``timing``): ``wall_s`` the wall time, ``time_ref`` the time in reference units (against
   a sparse reference kernel timed before and after every call), ``cpu_share`` CPU over wall,
   ``spread``, ``time_runs``, ``rejected``, ``loaded``, ``load1`` (1-minute load average);
-  ``machine`` (``machine_record``, JSON): the cores, the CPU model, the virtualisation, the thread
+  ``machine`` (``timing.machine_record``, JSON): the cores, the CPU model, the virtualisation, the thread
   settings and the software versions of the job that measured it.
   For the active-set solver the call is ``solve_discrete`` (a cascade warm start includes
   building and solving the coarse levels); for cvxpy it is ``cvxpy_solve`` (cvxpy's
@@ -43,7 +43,6 @@ import json
 import logging
 import math
 import os
-import platform
 import re
 import tempfile
 import time
@@ -58,7 +57,7 @@ from signorini.fem.norms.p1 import p1_norms
 from signorini.pipeline.artifacts import load_json, save_json
 from signorini.studies.scene.store import SceneMesh, load_system, read_norm
 from signorini.studies.work_precision.study import EXACT_LABEL, GROWTH_EXPONENT, SolverConfig, accuracy_status
-from signorini.studies.work_precision.timing import CallFailed, Protocol, ReferenceKernel, Timer
+from signorini.timing import CallFailed, Protocol, ReferenceKernel, Timer, machine_record
 
 log = logging.getLogger(__name__)
 
@@ -266,52 +265,6 @@ def skip_reason(
         was = float(prev["time_s"])
         return f"time budget (predicted {predicted:.0f} s > {time_limit_s:g} s from {was:.1f} s at {where})"
     return None
-
-
-SOFTWARE = ("numpy", "scipy", "cvxpy")  # the distributions whose versions a record names, with Python's
-
-
-def _read(path: Path) -> str:
-    try:
-        return path.read_text(encoding="utf-8", errors="replace")
-    except OSError:
-        return ""
-
-
-def machine_record(
-    environ: Mapping[str, str] | None = None,
-    cpuinfo: Path = Path("/proc/cpuinfo"),
-    product: Path = Path("/sys/class/dmi/id/product_name"),
-) -> dict[str, Any]:
-    """What a measurement ran on: ``cores`` (``os.cpu_count``), ``usable_cores`` (the affinity
-    mask), ``cpu_model`` (``model name`` of ``cpuinfo``; "" unknown), ``hypervisor`` (the CPU's
-    ``hypervisor`` flag: the machine is virtualised; None without ``cpuinfo``), ``product`` (the
-    firmware's product name, e.g. a hypervisor's; "" unknown), ``threads`` (each of
-    ``jobenv.THREAD_VARIABLES`` in ``environ``, default this process's; "" unset) and ``software``
-    (Python's version and those of ``SOFTWARE``)."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    from signorini.pipeline.jobenv import THREAD_VARIABLES
-    from signorini.studies.work_precision.timing import usable_cores
-
-    environ = os.environ if environ is None else environ
-    text = _read(cpuinfo)
-    fields = [line.split(":", 1) for line in text.splitlines() if ":" in line]
-    model = next((v.strip() for k, v in fields if k.strip() == "model name"), "")
-    flags = next((v.split() for k, v in fields if k.strip() == "flags"), None)
-    software = {"Python": platform.python_version()}
-    for name in SOFTWARE:
-        with contextlib.suppress(PackageNotFoundError):
-            software[name] = version(name)
-    return {
-        "cores": os.cpu_count(),
-        "usable_cores": usable_cores(),
-        "cpu_model": model,
-        "hypervisor": None if flags is None else "hypervisor" in flags,
-        "product": _read(product).strip(),
-        "threads": {name: environ.get(name, "") for name in THREAD_VARIABLES},
-        "software": software,
-    }
 
 
 def _fingerprint(u: np.ndarray) -> str:

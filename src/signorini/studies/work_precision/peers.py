@@ -171,7 +171,7 @@ def run_peer(
     under the timing protocol (``timer``, a ``timing.Timer``, with the reference ``kernel``),
     from u = 0 or from ``initial_guess``; certify its answer against ``disc`` (``A``, ``b``,
     ``boundary``).  Never raises."""
-    from signorini.studies.work_precision.timing import CallFailed
+    from signorini.timing import CallFailed
 
     if not route.available:
         return PeerOutcome(None, "skipped", route.reason, [])

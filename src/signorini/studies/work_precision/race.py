@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from signorini.studies.work_precision.study import SolverConfig, accuracy_status
-from signorini.studies.work_precision.timing import ReferenceKernel, Task, Timer, round_robin, task_summary
+from signorini.timing import ReferenceKernel, Task, Timer, round_robin, task_summary
 
 REFERENCE = "active_set"  # the reference solver of the ratios: our cascade active set
 

@@ -16,7 +16,7 @@ from signorini.formatting import fmt_rel, fmt_time, h_label, md_table, sci_md
 from signorini.pipeline.jobenv import THREAD_VARIABLES
 from signorini.published import TABLE1_NORMS, label_md
 from signorini.studies.work_precision import uncertainty as unc
-from signorini.studies.work_precision.timing import Protocol
+from signorini.timing import Protocol
 
 TIME = (
     "CPU time of one solver call (cvxpy's canonicalisation included; a PETSc peer: PETSc's `solve` in its driver, "
@@ -200,7 +200,7 @@ def _protocol_text(found: Mapping, protocol: Protocol) -> str:
 
 
 def _machine_record(record: Mapping) -> str:
-    """One machine record (``measure.machine_record``) in words."""
+    """One machine record (``timing.machine_record``) in words."""
     virtual = {True: "virtualised (the CPU's hypervisor flag)", False: "no hypervisor flag"}.get(
         record.get("hypervisor"), "virtualisation not recorded"
     )
