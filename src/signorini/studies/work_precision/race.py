@@ -36,7 +36,7 @@ def _guarded(call):
 
 def _status(config: SolverConfig, disc, tol: float | None, result) -> tuple[str, str, np.ndarray | None, Any]:
     """(status, reason, u, iterations) of a task's last result, under our KKT certificate."""
-    from signorini.studies.work_precision.measure import classify_failure, solver_options
+    from signorini.studies.work_precision.measure import classify_failure
     from signorini.studies.work_precision.peers import outcome
 
     if isinstance(result, Exception):
@@ -47,7 +47,7 @@ def _status(config: SolverConfig, disc, tol: float | None, result) -> tuple[str,
             return "failed", str(answer.get("reason", answer.get("status"))), None, None
         out = outcome(config, disc, tol, answer, u)
         return out.status, out.reason, out.result.u, out.result.iterations
-    required = solver_options(config, tol, None)[1]
+    required = config.runner.settings(config, tol, None)[1]
     status, reason = accuracy_status(result.certificate.worst, required)
     return status, reason, result.u, int(result.iterations)
 
@@ -66,7 +66,7 @@ def race(
     reference configuration's solution (max norm relative to ``‖u‖∞``) and the time ratios to it
     (``ratio_ref``: reference units, ``ratio_cpu``, ``ratio_wall``)."""
     from signorini.fem.solve import cascade_start
-    from signorini.studies.work_precision.measure import timed_call, warm_up
+    from signorini.studies.work_precision.measure import timed_call
 
     kernel = ReferenceKernel(disc.A)
     start, start_timing = None, {}
@@ -76,7 +76,7 @@ def race(
         start_timing = measured.summary(timer.protocol, timer.machine.cores) if start is not None else {}
     tasks = []
     for name, config in configs.items():
-        warm_up(config)
+        config.runner.warm_up(config)
         warm = config.initial == "cascade" and not config.exact
         if warm and start is None:
             continue  # no coarse level at this N: the variant would repeat the cold run
