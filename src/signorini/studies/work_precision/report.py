@@ -11,12 +11,16 @@ import math
 import os
 import re
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 from signorini.formatting import fmt_rel, fmt_time, h_label, md_table, sci_md
 from signorini.pipeline.jobenv import THREAD_VARIABLES
 from signorini.published import TABLE1_NORMS, label_md
 from signorini.studies.work_precision import uncertainty as unc
 from signorini.timing import Protocol
+
+if TYPE_CHECKING:
+    from signorini.studies.work_precision.table import Run
 
 TIME = (
     "CPU time of one solver call (cvxpy's canonicalisation included; a PETSc peer: PETSc's `solve` in its driver, "
@@ -175,8 +179,8 @@ def fmt_fit(p: Mapping) -> str:
     return f"{_signed(p['value'])} ({_signed(p['lo'])}{dash}{_signed(p['hi'])})"
 
 
-def _swept(df) -> list[str]:
-    return sorted({str(t) for t in df["tol_label"] if t not in ("default", "exact")}, key=float, reverse=True)
+def _swept(runs: Sequence[Run]) -> list[str]:
+    return sorted({r.tol_label for r in runs if r.tol_label not in ("default", "exact")}, key=float, reverse=True)
 
 
 def _protocol_text(found: Mapping, protocol: Protocol) -> str:
@@ -230,13 +234,13 @@ def _machine_text(found: Mapping) -> str:
     return text
 
 
-def _setup(df, found: Mapping, source: str, protocol: Protocol) -> list[str]:
+def _setup(runs: Sequence[Run], found: Mapping, source: str, protocol: Protocol) -> list[str]:
     lines = [
         SETUP.format(
             meshes=", ".join(str(N) for N in found["N"]),
             source=source,
-            solvers=", ".join(dict.fromkeys(df["label"])),
-            tolerances=", ".join(_swept(df)),
+            solvers=", ".join(dict.fromkeys(r.label for r in runs)),
+            tolerances=", ".join(_swept(runs)),
             time=TIME,
             counts=", ".join(f"{k} {v}" for k, v in sorted(found.get("counts", {}).items())),
         ),
@@ -252,11 +256,11 @@ def _setup(df, found: Mapping, source: str, protocol: Protocol) -> list[str]:
     return lines
 
 
-def _rules(df, found: Mapping) -> list[str]:
+def _rules(runs: Sequence[Run], found: Mapping) -> list[str]:
     """The selection rule and the intervals, stated once."""
     selection = SELECTION.format(
         n_norms=len(found["table1_norms"]),
-        tolerances=", ".join(_swept(df)),
+        tolerances=", ".join(_swept(runs)),
         meshes=", ".join(str(N) for N in found["N"]),
         n_meshes=len(found["N"]),
     )
@@ -563,15 +567,15 @@ def _cost_table(found: Mapping) -> list[str]:
     return ["", "## Cost of accuracy (exact solver)", "", intro, "", md_table(header, rows)]
 
 
-def _failure_rows(bad) -> list[list[str]]:
+def _failure_rows(bad: Sequence[Run]) -> list[list[str]]:
     """Failed, inaccurate and skipped runs grouped by (solver, status, reason)."""
     groups: dict[tuple[str, str, str], list[tuple[int, str]]] = {}
     worst: dict[tuple[str, str, str], float] = {}
-    for _, r in bad.iterrows():
-        key = (str(r["label"]), str(r["status"]), str(r["reason"]) or "—")
-        groups.setdefault(key, []).append((int(r["N"]), str(r["tol_label"])))
-        ratio = float(r.get("kkt_worst", math.nan)) / float(r.get("kkt_required", math.nan))
-        if r["status"] == "inaccurate" and math.isfinite(ratio):  # one row per solver, the worst ratio
+    for r in bad:
+        key = (r.label, r.status, r.reason or "—")
+        groups.setdefault(key, []).append((r.N, r.tol_label))
+        ratio = r.kkt_worst / r.kkt_required
+        if r.status == "inaccurate" and math.isfinite(ratio):  # one row per solver, the worst ratio
             worst[key] = max(worst.get(key, 0.0), ratio)
     rows = []
     for key, runs in groups.items():
@@ -587,8 +591,8 @@ def _failure_rows(bad) -> list[list[str]]:
     return rows
 
 
-def _failures(df) -> list[str]:
-    bad = df[df["status"] != "ok"]
+def _failures(runs: Sequence[Run]) -> list[str]:
+    bad = [r for r in runs if r.status != "ok"]
     lines = [
         "",
         "## Failures, inaccurate answers and skips",
@@ -596,20 +600,22 @@ def _failures(df) -> list[str]:
         "Grouped by solver, status and reason; a skip names the mesh whose run predicted it.",
         "",
     ]
-    if bad.empty:
+    if not bad:
         return [*lines, "None."]
     return [*lines, md_table(["solver", "status", "tolerance at N", "reason"], _failure_rows(bad), align="l")]
 
 
-def work_precision_md(df, found: Mapping, source: str = "paper", protocol: Protocol | None = None) -> str:
-    """``work_precision.md`` from the measurement table ``df`` (``work_precision.csv``) and
+def work_precision_md(
+    runs: Sequence[Run], found: Mapping, source: str = "paper", protocol: Protocol | None = None
+) -> str:
+    """``work_precision.md`` from the runs of the measurement table (``work_precision.csv``) and
     ``findings.findings``; ``source``: the scene whose exact solutions were reused; ``protocol``:
     the timing protocol they were measured under (default: its defaults)."""
-    labels = dict(zip(df["config"], df["label"], strict=False))
-    lines = [HEADER, *_setup(df, found, source, protocol or Protocol()), *_rules(df, found)]
+    labels = {r.config: r.label for r in runs}
+    lines = [HEADER, *_setup(runs, found, source, protocol or Protocol()), *_rules(runs, found)]
     lines += ["", "## Findings", "", *_brief(found, labels)]
     lines += _table1_digits(found) + _time_to_digits(found, labels) + _fair_table(found, labels)
-    lines += _peer_table(found) + _eoc_table(found) + _cost_table(found) + _failures(df)
+    lines += _peer_table(found) + _eoc_table(found) + _cost_table(found) + _failures(runs)
     return re.sub(r"\n{3,}", "\n\n", "\n".join(lines)).rstrip() + "\n"
 
 
@@ -628,11 +634,11 @@ def report_stage(
     from signorini.pipeline.artifacts import atomic_write_text
     from signorini.studies.paper.reference import by_mesh, read_table_csv
     from signorini.studies.work_precision.findings import findings
-    from signorini.studies.work_precision.table import read_measurements
+    from signorini.studies.work_precision.table import read_runs
 
-    df = read_measurements(csv_path)
+    runs = read_runs(csv_path)
     p1, p2 = read_table_csv(paper_table1), read_table_csv(paper_table2)
     protocol = Protocol.from_mapping(timing)
-    found = findings(df, table1_norms or TABLE1_NORMS, by_mesh(p1, "L4"), by_mesh(p2, "L4"), protocol)
-    atomic_write_text(out_md, work_precision_md(df, found, source, protocol))
+    found = findings(runs, table1_norms or TABLE1_NORMS, by_mesh(p1, "L4"), by_mesh(p2, "L4"), protocol)
+    atomic_write_text(out_md, work_precision_md(runs, found, source, protocol))
     return found
