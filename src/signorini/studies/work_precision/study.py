@@ -8,6 +8,7 @@ import math
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from signorini.fem.mesh import DEFAULT_DIAGONAL
 from signorini.published import FIGURE3_NORMS
@@ -24,6 +25,9 @@ PEER_SOLVERS = {"petsc_snes": "snes", "petsc_tao": "tao"}
 PEER_PYTHON = "/usr/bin/python3"  # Debian's python3-petsc4py-real is built for it
 CASCADE_START = "cascade"
 WARM_SUFFIX = "_ws"  # name of a peer's variant started from the cascade (``same_warm_start``)
+# the prose of work_precision.md (report.prose): a file of the package that no import names, so the
+# report's rule lists it with its code inputs itself (workflow/rules/work_precision.smk)
+REPORT_TEMPLATE = Path(__file__).with_name("report.tmpl")
 # the routes of the study's configurations, name → its runner (a name ending in "_" is a prefix:
 # cvxpy_<solver>); spelled as the scenes and the stability atlas spell them
 ROUTES: dict[str, Runner] = {
