@@ -60,13 +60,13 @@ def test_every_solver_is_named_as_the_scenes_and_the_atlas_name_it():
     assert table_solver("cvxpy_clarabel") == "CLARABEL" and table_solver("multigrid") == "multigrid"
     assert table_route("CLARABEL") == "cvxpy_clarabel" and table_route("petsc_snes") == "petsc_snes"
     for name in ("OSQP", "osqp", "cvxpy_", "gurobi"):
-        with pytest.raises(UnknownSolverError, match=f"unknown solver '{name}'; choose one of the routes active_set"):
+        with pytest.raises(UnknownSolverError, match=f"unknown solver '{name}'; choose one of the routes .*multigrid"):
             kind_of(name)
     with pytest.raises(UnknownSolverError, match="study.configs.osqp.solver: unknown solver 'OSQP'.*cvxpy_osqp"):
         study_configs({"configs": {"osqp": {"solver": "OSQP"}}})
     with pytest.raises(StudyConfigError, match="study.qp_solvers: 'active_set' is not a QP solver"):
         study_configs({"qp_solvers": ["active_set"]})
-    assert kind_of(SolverConfig("x", "cvxpy_scs", "SCS").solver) is Kind.QP
+    assert SolverConfig("x", "cvxpy_scs", "SCS").kind is Kind.QP
 
 
 def test_the_shipped_study_names_its_solvers_as_the_scenes_do():

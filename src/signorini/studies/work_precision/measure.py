@@ -56,6 +56,7 @@ import numpy as np
 from signorini.fem.norms.p1 import p1_norms
 from signorini.pipeline.artifacts import load_json, save_json
 from signorini.studies.scene.store import SceneMesh, load_system, read_norm
+from signorini.studies.work_precision.routes import Attempt
 from signorini.studies.work_precision.study import (
     EXACT_LABEL,
     GROWTH_EXPONENT,
@@ -66,18 +67,6 @@ from signorini.studies.work_precision.study import (
 from signorini.timing import CallFailed, Protocol, ReferenceKernel, Timer, machine_record
 
 log = logging.getLogger(__name__)
-
-@dataclass
-class Attempt:
-    """The outcome of one solver call: result (or None), status, reason, timings and extra
-    record fields (a peer's set-up time, converged reason and provenance)."""
-
-    result: Any
-    status: str
-    reason: str
-    times: list[float]
-    extra: dict = field(default_factory=dict)
-
 
 @contextlib.contextmanager
 def _solver_log(config: SolverConfig) -> Iterator[tuple[dict, Path | None]]:
@@ -162,8 +151,7 @@ def run_solver(
     if config.peer:
         from signorini.studies.work_precision.peers import run_peer
 
-        out = run_peer(config, peer, disc, tol, time_limit_s, timer, kernel, initial_guess)
-        return Attempt(out.result, out.status, out.reason, out.times, out.extra)
+        return run_peer(config, peer, disc, tol, time_limit_s, timer, kernel, initial_guess)
     limit = None if config.exact else time_limit_s
     options, required = config.runner.settings(config, tol, limit)
     with _solver_log(config) as (log_options, log_path):

@@ -16,6 +16,7 @@ import contextlib
 import enum
 import math
 from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
@@ -30,6 +31,19 @@ class Kind(enum.Enum):
     EXACT = "exact"
     QP = "qp"
     PEER = "peer"
+
+
+@dataclass
+class Attempt:
+    """What one run of a route gave: its result (a ``SolveResult``, or None), status, reason, the CPU
+    seconds of its samples, and further record fields (``timing``: the protocol's summary; a peer's
+    set-up time, converged reason and provenance)."""
+
+    result: Any
+    status: str
+    reason: str
+    times: list[float]
+    extra: dict = field(default_factory=dict)
 
 
 class Runner:
