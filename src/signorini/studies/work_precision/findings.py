@@ -1,13 +1,6 @@
-"""Findings of the work-precision study: what ``work_precision.md`` states, in numbers.
-
-Computed from the runs of the measurement table (``work_precision.csv``, ``table.Run``): how many Table 1 cells each
-(solver, tolerance) changes in their printed 5 significant digits, each configuration's selected
-tolerance and selected runs (``selection``: the one rule behind every time, ratio, ranking and
-exponent), the fastest selected run and the comparisons from the same start with their intervals
-(``uncertainty``), the exponents of time against unknowns, the ``L⁴`` EOCs of the inexact solutions
-against the published Table 2 column, the published ``L⁴`` cells each run comes closest to, the
-exact solver's cost per digit, what the timing protocol did, and what the table records of the
-machine and the software.  ``report`` renders them.
+"""Findings of the work-precision study: what ``work_precision.md`` states, in numbers
+(``findings``), computed from the runs of the measurement table (``table.Run``) through one
+selection rule (``selection``) and the intervals of ``uncertainty``; ``report`` renders them.
 
 Times are ranked and divided in CPU seconds (``time_s``), not in the reference units
 (``time_ref``): on this machine the reference kernel's time varies from sample to sample about as
