@@ -7,6 +7,7 @@ import itertools
 import math
 import os
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -15,6 +16,10 @@ from signorini.published import PAPER_NORMS, label_tex
 from signorini.studies.work_precision.routes import Kind
 from signorini.studies.work_precision.study import FIGURE_NORMS, PEER_SOLVERS
 from signorini.studies.work_precision.table import Run, tolerance_order
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 TOL_MARKERS = {"exact": "P", "default": "*", "1e-02": "o", "1e-04": "s", "1e-06": "^", "1e-08": "D", "1e-10": "v"}
 
@@ -171,8 +176,8 @@ def _legend_handles(shown: Sequence[Run], configs, colors, order) -> tuple[list,
 
 @styled
 def work_precision_figure(
-    runs: Sequence[Run], figure_N: Sequence[int] = (), fig=None, configs: Sequence[str] | None = None
-):
+    runs: Sequence[Run], figure_N: Sequence[int] = (), fig: Figure | None = None, configs: Sequence[str] | None = None
+) -> Figure:
     """Algebraic error ``‖u_h^solver − u_h^exact‖`` (rows: ``L⁴``, ``W^{1,4}``) against solve time,
     log-log, one panel column per ``N`` of ``figure_N`` (default: coarsest, middle, finest).
 
@@ -251,7 +256,7 @@ def _exact_runs(runs: Sequence[Run]) -> list[Run]:
 
 
 @styled
-def cost_panel(runs: Sequence[Run], ax=None):
+def cost_panel(runs: Sequence[Run], ax: Axes | None = None) -> Axes:
     """Total error ``‖u − u_h‖`` of the exact solver in every norm of the paper against total run
     time (assembly + solve) over the mesh sequence, log-log, with the fitted slope per norm (one
     colour and marker per norm)."""
@@ -321,7 +326,7 @@ def time_series(runs: Sequence[Run], table1_norms: Sequence[str] | None = None) 
 
 
 @styled
-def time_panel(runs: Sequence[Run], ax=None):
+def time_panel(runs: Sequence[Run], ax: Axes | None = None) -> Axes:
     """Where the time goes: assembly and the selected runs of the exact configurations against the
     unknowns; dashed: the drawn PETSc peers' selected runs, with their exponents (``time_series``);
     bars: the times' intervals (``uncertainty``); the legend below the axes."""
@@ -359,7 +364,7 @@ def time_panel(runs: Sequence[Run], ax=None):
 
 
 @styled
-def cost_of_accuracy(runs: Sequence[Run], fig=None):
+def cost_of_accuracy(runs: Sequence[Run], fig: Figure | None = None) -> Figure:
     """``cost_panel`` (left) and ``time_panel`` (right) side by side.  ``runs``: ``work_precision.csv``."""
     from matplotlib.ticker import NullFormatter
 

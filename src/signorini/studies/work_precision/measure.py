@@ -46,7 +46,7 @@ import os
 import re
 import tempfile
 import time
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -115,7 +115,7 @@ def timed_call(
     time_limit_s: float | None = None,
     peer=None,
     initial_guess: np.ndarray | None = None,
-):
+) -> Callable[[], tuple]:
     """The call ``run_solver`` times, for a round-robin of several configurations
     (``timing.round_robin``; ``benchmarks/``): in process ``(SolveResult, None)``; a peer
     ``((answer, u), (solve wall s, solve CPU s))`` (``peers.driver_call``, ``peers.outcome``)."""
