@@ -14,7 +14,7 @@ u = 0 and from the cascade's interpolated coarse solution (``<method>_ws``; the 
 added to its time, as the cascade's coarse levels are part of ours), through the study's driver
 (``workflow/peers/petsc_peer.py`` under ``--python``) at tolerance ``--tol`` (1e-10, where every
 converging peer agrees with our certified solution).  They are timed round-robin under the
-protocol of ``signorini.studies.work_precision.timing`` (``race.race``): CPU time of each call,
+protocol of ``signorini.timing`` (``race.race``, ``benchmarks/race.py``): CPU time of each call,
 reference units against a sparse kernel timed before and after it, the load recorded, samples
 under a load above the cores redone.
 
@@ -40,15 +40,15 @@ single_threaded()  # one thread, like the peers (before numpy loads its BLAS)
 
 import numpy as np  # noqa: E402
 import yaml  # noqa: E402
+from race import race  # noqa: E402  (benchmarks/race.py, next to this script)
 
 from signorini.fem.discrete import build  # noqa: E402
 from signorini.fem.problem import Problem  # noqa: E402
 from signorini.pipeline.artifacts import save_json  # noqa: E402
 from signorini.pipeline.paths import PEER_DRIVER  # noqa: E402
 from signorini.studies.work_precision.peers import PeerRoute, probe  # noqa: E402
-from signorini.studies.work_precision.race import race  # noqa: E402
 from signorini.studies.work_precision.study import PEER_PYTHON, WARM_SUFFIX, study_configs  # noqa: E402
-from signorini.studies.work_precision.timing import Protocol, Timer  # noqa: E402
+from signorini.timing import Protocol, Timer  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 METHODS = ["petsc_tron_boomeramg", "petsc_rsls_cholmod", "petsc_rsls_boomeramg"]

@@ -7,8 +7,8 @@ work-precision study, timed once as the machine is and once with busy processes 
 Solvers (configurations of the shipped study, ``workflow/config.yaml``): our active set from
 the cascade (the reference of the ratios) and cold, OSQP, CLARABEL and SCS through cvxpy at
 ``--tol``, and, when petsc4py runs under ``--python``, the PETSc peers of ``--peers``.  Per mesh
-they are timed round-robin under the protocol of ``signorini.studies.work_precision.timing``
-(``race.race``); then ``--busy`` processes (default 2; ``--busy-kind numpy``: streaming array
+they are timed round-robin under the protocol of ``signorini.timing``
+(``race.race``, ``benchmarks/race.py``); then ``--busy`` processes (default 2; ``--busy-kind numpy``: streaming array
 updates and small matrix products, memory traffic as well as arithmetic; ``spin``: a Python
 loop) are started, the same slice is timed again, and they are stopped.
 
@@ -109,10 +109,11 @@ def configs(names: list[str]):
 
 def one_run(Ns: list[int], chosen: dict, tol: float, timer, python: str, probe: dict, limit: float) -> dict:
     """The slice once: per N, the race of every chosen configuration."""
+    from race import race  # benchmarks/race.py, next to this script
+
     from signorini.fem.discrete import build
     from signorini.fem.problem import Problem
     from signorini.studies.work_precision.peers import PeerRoute
-    from signorini.studies.work_precision.race import race
 
     out = {}
     for N in Ns:
@@ -171,7 +172,7 @@ def main(argv: list[str] | None = None) -> int:
     from signorini.pipeline.artifacts import save_json
     from signorini.studies.work_precision.peers import probe
     from signorini.studies.work_precision.study import PEER_PYTHON
-    from signorini.studies.work_precision.timing import Protocol, Timer
+    from signorini.timing import Protocol, Timer
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--N", default="201,501", help="meshes, comma-separated")

@@ -165,7 +165,7 @@ TEST_SCENES = {
                     "options": {"tao_type": "tron", "pc_type": "cholesky", "pc_factor_mat_solver_type": "cholmod"},
                 },
             },
-            "qp_solvers": ["OSQP"],
+            "qp_solvers": ["cvxpy_osqp"],
             "peer_python": TEST_PEER_PYTHON,
         },
     },

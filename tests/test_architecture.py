@@ -359,12 +359,14 @@ def test_the_code_and_the_design_measurements_point_to_each_other():
 # tests/ mirrors src/signorini/ (docs/architecture.md): the module signorini.<a>.<b> is tested in
 # tests/<a>/test_<b>.py, a package whose __init__ holds code in test_<package>.py inside its folder
 # (signorini.solvers: tests/solvers/test_solvers.py; signorini itself: tests/test_signorini.py),
-# another top-level package of src/ (the logger plugin) in tests/test_<package>.py.  Modules listed
-# here, with the reason, need no test module of their own.
+# another top-level package of src/ (the logger plugin) in tests/test_<package>.py, a script of
+# benchmarks/ that others import (benchmarks/race.py) in tests/benchmarks/test_<script>.py.  Modules
+# listed here, with the reason, need no test module of their own.
 LAYOUT_EXEMPT: dict[str, str] = {}
 # test modules at the top of tests/ that check the repository, not one module
 REPOSITORY_CHECKS = ("test_architecture.py", "test_docs.py", "test_setup.py", "test_figures_not_clipped.py")
 END_TO_END = "end_to_end"  # tests/end_to_end/: Snakemake runs on repository copies, by theme
+BENCHMARKS = "benchmarks"  # tests/benchmarks/test_<script>.py: the tests of benchmarks/<script>.py
 
 
 def holds_code(path: Path) -> bool:
@@ -414,6 +416,8 @@ def layout_problems(src: Path, tests: Path, exempt: dict[str, str]) -> list[str]
         elif module not in imported_modules(tests / rel):
             problems.append(f"tests/{rel.as_posix()} does not import {module}")
     allowed = set(expected.values()) | {Path(name) for name in REPOSITORY_CHECKS}
+    scripts = src.parent / BENCHMARKS
+    allowed |= {Path(BENCHMARKS, f"test_{p.name}") for p in scripts.glob("*.py")} if scripts.is_dir() else set()
     for path in sorted(tests.rglob("test_*.py")):
         rel = path.relative_to(tests)
         if rel.parts[0] != END_TO_END and rel not in allowed:
@@ -462,11 +466,16 @@ FAKE_TESTS = {
         ({"test_plugin.py": None}, {}, ["plugin: no tests/test_plugin.py"]),
         ({"fem/test_mesh.py": None}, {"signorini.fem.mesh": "a reason"}, []),
         ({}, {"signorini.fem.gone": "a reason"}, ["signorini.fem.gone: exempt but not a module of src/"]),
+        ({"benchmarks/test_race.py": ""}, {}, []),
+        ({"benchmarks/test_gone.py": ""}, {},
+         ["tests/benchmarks/test_gone.py is the test module of no module of src/"]),
     ],
     ids=["complete", "missing", "not-imported", "similar-name", "misplaced", "theme-file", "package-init", "plugin",
-         "exempt", "stale-exemption"],
+         "exempt", "stale-exemption", "benchmark", "no-such-benchmark"],
 )
 def test_the_layout_check_finds_what_breaks_the_layout(tmp_path, change, exempt, problems):
+    (tmp_path / "benchmarks").mkdir()
+    (tmp_path / "benchmarks/race.py").write_text("def race(): ...\n", encoding="utf-8")
     for root, files in (("src", FAKE_SRC), ("tests", FAKE_TESTS | change)):
         for rel, text in files.items():
             if text is not None:

@@ -91,7 +91,8 @@ rule work_precision_report:
         csv=rules.work_precision_table.output.csv,
         paper_table1=REFERENCES["paper_table1"],
         paper_table2=REFERENCES["paper_table2"],
-        code=code("work_precision_report"),
+        # and the report's prose, a file of the package that no import names (study.REPORT_TEMPLATE)
+        code=[*code("work_precision_report"), os.path.relpath(wp_study.REPORT_TEMPLATE)],
     output:
         **reported(FIGURES["work_precision_report"], "work_precision", "Work precision"),
     log:

@@ -337,13 +337,14 @@ def race_findings(sources: Mapping[str, str]) -> list[Verdict]:
     """The work-precision study's race to Table 1's digits, with the intervals of its ratios."""
     from signorini.published import TABLE1_NORMS
     from signorini.studies.work_precision.findings import findings
+    from signorini.studies.work_precision.table import read_runs
 
     if missing := _missing(sources, ("work_precision",)):
         return missing
     path = sources["work_precision"]
-    df = pd.read_csv(path, encoding="utf-8")
-    found = findings(df, TABLE1_NORMS)
-    label = dict(zip(df["config"], df["label"], strict=False))
+    runs = read_runs(path)
+    found = findings(runs, TABLE1_NORMS)
+    label = {r.config: r.label for r in runs}
     out = []
     for key, what in (("same_warm_start", "from the same warm start"), ("cold_against_cold", "cold against cold")):
         rows = found["fair"].get(key, [])
@@ -369,7 +370,7 @@ def race_findings(sources: Mapping[str, str]) -> list[Verdict]:
         if ours is not None and ours is not first:
             text += f"; ours ({label[ours['config']]}) {_two(ours['value'])} s, {_ratio_text(ours['vs_fastest'])} of it"
         if unrecorded := found["software"]["unrecorded"]:
-            text += f"; CPU seconds, and {unrecorded} of the {len(df)} runs do not record the machine's CPU model"
+            text += f"; CPU seconds, and {unrecorded} of the {len(runs)} runs do not record the machine's CPU model"
         out.append(Verdict(text, "measured", (path,)))
     return out
 

@@ -1,22 +1,23 @@
-"""Synthetic measurement tables (``work_precision.csv``) for the tests of the selection, the
-findings, the report and the figures.
+"""Synthetic measurement tables (the runs of ``work_precision.csv``) for the tests of the selection,
+the findings, the report and the figures.
 
-``run_row`` makes one run's row as the timing protocol records it (its samples, the median of
-which is its time; the stop of its sampling; discretisation errors L⁴ ∝ h² and W^{1,4} ∝ h on the
-mesh N = 1/h).  ``measurements``: the exact solver, a QP solver at two tolerances and one that
-fails, on N = 10, 20, 40."""
+``run_row`` makes one run as the timing protocol records it (its samples, the median of which is
+its time; the stop of its sampling; discretisation errors L⁴ ∝ h² and W^{1,4} ∝ h on the mesh
+N = 1/h).  ``measurements``: the exact solver, a QP solver at two tolerances and one that fails, on
+N = 10, 20, 40.  ``changed``: runs with some fields changed where others have given values."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import statistics
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
-import pandas as pd
 import pytest
 
 from signorini.studies.work_precision.study import INACCURATE
-from signorini.studies.work_precision.timing import spread
+from signorini.studies.work_precision.table import Run
+from signorini.timing import spread
 
 REASONS = {"ok": "", "inaccurate": INACCURATE, "failed": "solver status infeasible"}
 
@@ -32,13 +33,13 @@ def _row(
     rel: float = 0.0,
     stop: str = "spread",
     **extra,
-) -> dict:
+) -> Run:
     """One run: ``rel`` is the relative change of its L⁴ error against the exact one's; no answer
     (no total errors) unless ``ok`` or ``inaccurate``."""
     disc = {"L4": 0.1 / N**2, "W14": 0.2 / N}
     answered = status in ("ok", "inaccurate")
     median = statistics.median(times)
-    return {
+    return Run.of({
         "N": N,
         "h": 1 / N,
         "n_dofs": (N + 1) ** 2,
@@ -73,7 +74,7 @@ def _row(
         "total_W14": disc["W14"] if answered else math.nan,
         "alg_W14": 0.0,
         **extra,
-    }
+    })
 
 
 @pytest.fixture
@@ -93,8 +94,22 @@ def samples_around():
     return around
 
 
+def _changed(runs: Sequence[Run], where: Mapping, **values) -> list[Run]:
+    """``runs`` with ``values`` set in those whose fields have the values of ``where``."""
+    def matches(run: Run) -> bool:
+        return all(getattr(run, k) == v for k, v in where.items())
+
+    return [dataclasses.replace(r, **values) if matches(r) else r for r in runs]
+
+
 @pytest.fixture
-def measurements() -> pd.DataFrame:
+def changed():
+    """``_changed``: runs with some fields changed."""
+    return _changed
+
+
+@pytest.fixture
+def measurements() -> list[Run]:
     rows = []
     for N in (10, 20, 40):
         rows += [
@@ -103,4 +118,4 @@ def measurements() -> pd.DataFrame:
             _row(N, "qp", "1e-06", around(0.003 * N), rel=1e-7, label="QP", stop="max_repeats"),
             _row(N, "scs", "1e-06", [0.004 * N], status="failed", label="SCS", solver="SCS", stop="answer rejected"),
         ]
-    return pd.DataFrame(rows)
+    return rows

@@ -4,14 +4,16 @@ solver with a colour and marker of its own for every series."""
 
 from __future__ import annotations
 
-import pandas as pd
+import dataclasses
 
 from signorini.studies.work_precision import figures as wpfig
 from signorini.studies.work_precision.figures import cost_of_accuracy, cost_panel, family
+from signorini.studies.work_precision.table import Run
 
 
-def test_families():
-    assert [family(s) for s in ("petsc_snes", "petsc_tao", "OSQP")] == ["PETSc SNES VI", "PETSc TAO", "OSQP"]
+def test_families(run_row):
+    runs = [run_row(101, "x", "1e-08", [1.0], solver=s) for s in ("petsc_snes", "petsc_tao", "OSQP")]
+    assert [family(r) for r in runs] == ["PETSc SNES VI", "PETSc TAO", "OSQP"]
 
 
 def test_the_cost_panel_fits_the_slope_of_each_error_against_the_total_time(measurements):
@@ -25,7 +27,7 @@ def test_the_cost_panel_fits_the_slope_of_each_error_against_the_total_time(meas
     assert len(fig.axes) == 2 and fig.axes[1].get_title() == "Where the time goes"
 
 
-def _families(run_row) -> pd.DataFrame:
+def _families(run_row) -> list[Run]:
     """Four exact configurations, four TAO methods, four QP solvers and a failing one, on N = 101, 201."""
     rows = []
     for N in (101, 201):
@@ -39,9 +41,7 @@ def _families(run_row) -> pd.DataFrame:
         rows += [run_row(N, f"tao{k}", "1e-08", [4.0 - k], solver="petsc_tao") for k in range(4)]
         rows += [run_row(N, f"qp{k}", "1e-08", [1.0], solver=f"QP{k}") for k in range(4)]  # one family each
         rows.append(run_row(N, "broken", "1e-08", [1.0], solver="QPX", status="failed"))
-    df = pd.DataFrame(rows)
-    df["alg_L4"] = df["alg_W14"] = 1e-9
-    return df
+    return [dataclasses.replace(r, alg={"L4": 1e-9, "W14": 1e-9}) for r in rows]
 
 
 def test_figure_draws_the_fastest_configuration_per_family_with_the_legend_below(run_row):
@@ -62,9 +62,8 @@ def test_figure_draws_the_fastest_configuration_per_family_with_the_legend_below
     assert all(leg.get_window_extent().y1 < lowest for leg in fig.legends)  # no legend over a panel
 
 
-def test_an_inaccurate_run_does_not_make_a_configuration_the_fastest_of_its_family(run_row):
-    df = _families(run_row)
-    df.loc[(df["config"] == "tao3") & (df["N"] == 201), "status"] = "inaccurate"
+def test_an_inaccurate_run_does_not_make_a_configuration_the_fastest_of_its_family(run_row, changed):
+    df = changed(_families(run_row), {"config": "tao3", "N": 201}, status="inaccurate")
     assert "tao2" in wpfig.figure_series(df, ["L4"]) and "tao3" not in wpfig.figure_series(df, ["L4"])
 
 
@@ -81,7 +80,7 @@ def test_figure_keeps_the_fastest_exact_configuration_of_each_start_when_routes_
             run_row(N, "ours_mg_cold", "exact", [1.5], solver="multigrid"),
         ]
         rows += [run_row(N, f"qp{k}", "1e-08", [1.0], solver=f"QP{k}") for k in range(5)]
-    series = wpfig.figure_series(pd.DataFrame(rows), ["L4"])
+    series = wpfig.figure_series(rows, ["L4"])
     assert [c for c in series if not c.startswith("qp")] == ["ours", "ours_mg_cold"]
     assert len(series) == 7
 

@@ -8,12 +8,12 @@ import json
 import math
 
 import numpy as np
-import pandas as pd
 import pytest
 from helpers import ROOT
 
-from signorini.studies.work_precision.findings import findings, is_peer, pd_numeric, starts
-from signorini.studies.work_precision.timing import Protocol
+from signorini.studies.work_precision.findings import findings
+from signorini.studies.work_precision.table import Run
+from signorini.timing import Protocol
 
 NORMS = ["L4", "W14"]
 
@@ -39,18 +39,17 @@ def test_findings_select_one_tolerance_per_configuration_and_time_its_runs(measu
     assert found["exact"]["time_factor_per_digit_L4"]["value"] == pytest.approx(10**0.5, rel=1e-3)
 
 
-def test_an_inaccurate_run_is_selected_nowhere(measurements):
+def test_an_inaccurate_run_is_selected_nowhere(measurements, changed):
     """With the QP solver's 1e-06 run inaccurate on the finest mesh it has no selected tolerance: it
     is neither ranked there nor on the coarser meshes, where its runs are ok."""
-    df = measurements.copy()
-    df.loc[(df["config"] == "qp") & (df["tol_label"] == "1e-06") & (df["N"] == 40), "status"] = "inaccurate"
-    found = findings(df, NORMS)
+    runs = changed(measurements, {"config": "qp", "tol_label": "1e-06", "N": 40}, status="inaccurate")
+    found = findings(runs, NORMS)
     assert found["tolerance"]["qp"] is None
     assert all("qp" not in found["selected"][N] for N in (10, 20, 40))
     assert [r["config"] for r in found["fastest"]] == ["exact"] and "qp" not in found["scaling"]
 
 
-def _race(run_row, samples_around, warm_other: float, width: float = 0.02) -> pd.DataFrame:
+def _race(run_row, samples_around, warm_other: float, width: float = 0.02) -> list[Run]:
     """Ours from the cascade and cold, a peer from the cascade start and cold, on N = 101, 201."""
     rows = []
     for N in (101, 201):
@@ -63,7 +62,7 @@ def _race(run_row, samples_around, warm_other: float, width: float = 0.02) -> pd
                 N, "tron_ws", "1e-08", samples_around(warm_other, width=width), start="cascade", solver="petsc_tao"
             ),
         ]
-    return pd.DataFrame(rows)
+    return rows
 
 
 def test_same_warm_start_and_cold_against_cold_with_their_intervals(run_row, samples_around):
@@ -93,7 +92,7 @@ def test_a_ratio_whose_interval_straddles_1_is_a_tie(run_row, samples_around):
     assert fastest[1]["vs_fastest"]["verdict"] == "tie" and fastest[0]["vs_fastest"] is None
 
 
-def test_the_protocol_counts_what_happened(measurements):
+def test_the_protocol_counts_what_happened(measurements, changed):
     """From the table: the stops, the samples per run with an answer, the median spreads overall and
     of the runs short enough for the budget to hold ``min_repeats`` samples."""
     p = findings(measurements, NORMS, protocol=Protocol(budget_s=0.15, min_repeats=3))["protocol"]
@@ -103,31 +102,29 @@ def test_the_protocol_counts_what_happened(measurements):
     assert p["spread_median"] == pytest.approx(0.04, rel=1e-3)
     assert p["short_s"] == pytest.approx(0.05) and p["short"] == 6  # 0.01 … 0.04 s of 0.01 … 0.12 s
     assert p["spread_median_short"] == pytest.approx(0.04, rel=1e-3)
-    fewer = measurements.copy()
-    fewer.loc[fewer["config"] == "qp", "times"] = "0.05"
-    fewer.loc[fewer["config"] == "qp", "spread"] = 0.0
+    fewer = changed(measurements, {"config": "qp"}, times="0.05", spread=0.0)
     q = findings(fewer, NORMS, protocol=Protocol(budget_s=0.15))["protocol"]
     assert q["samples"] == {1: 6, 3: 3} and q["several"] == 3
 
 
-def test_the_table_says_what_it_records_of_the_machine_and_the_software(measurements):
+def test_the_table_says_what_it_records_of_the_machine_and_the_software(measurements, changed):
     found = findings(measurements, NORMS)
     assert found["software"] == {"petsc": [], "machines": [], "unrecorded": 12}
     record = {"cores": 2, "cpu_model": "AMD EPYC", "hypervisor": True}
-    df = measurements.assign(machine=json.dumps(record), peer_info="PETSc 3.18.5: tron")
-    df.loc[df["N"] == 10, "machine"] = ""  # measured before the column
-    sw = findings(df, NORMS)["software"]
+    runs = changed(measurements, {}, machine=json.dumps(record), peer_info="PETSc 3.18.5: tron")
+    runs = changed(runs, {"N": 10}, machine="")  # measured before the column
+    sw = findings(runs, NORMS)["software"]
     assert sw == {"petsc": ["PETSc 3.18.5"], "machines": [{"record": record, "runs": 8}], "unrecorded": 4}
 
 
 def test_on_the_committed_table_every_section_uses_the_same_selected_runs():
     """BNLS at 1e-06 is inaccurate at N = 501 (and 401): its tolerance is 1e-08 on every mesh; TRON +
     BoomerAMG from the cascade start has one time at N = 401 in every section."""
-    from signorini.studies.work_precision.table import read_measurements
+    from signorini.studies.work_precision.table import read_runs
 
-    df = read_measurements(ROOT / "paper_figures/work_precision.csv")
+    runs = read_runs(ROOT / "paper_figures/work_precision.csv")
     keep = ["active_set", "multigrid", "petsc_bnls", "petsc_bnls_ws", "petsc_tron_boomeramg_ws", "osqp"]
-    found = findings(df[df["config"].isin(keep)], ["L4", "Linf", "W14", "W1inf", "H12"])
+    found = findings([r for r in runs if r.config in keep], ["L4", "Linf", "W14", "W1inf", "H12"])
     assert found["tolerance"]["petsc_bnls"] == "1e-08" and found["tolerance"]["osqp"] is None
     assert {r["tol_label"] for N in found["N"] for c, r in found["selected"][N].items() if c == "petsc_bnls"} == {
         "1e-08"
@@ -138,15 +135,20 @@ def test_on_the_committed_table_every_section_uses_the_same_selected_runs():
     assert all(math.isfinite(found["scaling"][c]["value"]) for c in found["scaling"])
 
 
-def test_starts_peers_and_numeric_columns(measurements):
-    assert set(starts(measurements[measurements["config"] == "exact"])) == {"cascade"}
-    assert set(starts(measurements[measurements["config"] != "exact"])) == {"cold"}
-    assert not is_peer(measurements).any()
-    peers = measurements.assign(solver=np.where(measurements["config"] == "qp", "petsc_tao", measurements["solver"]))
-    assert list(is_peer(peers)) == list(peers["config"] == "qp")
-    flags = measurements.assign(loaded=["True", False, True, None] * 3)
-    np.testing.assert_array_equal(pd_numeric(flags, "loaded")[:4], [1.0, 0.0, 1.0, math.nan])
-    assert np.isnan(pd_numeric(measurements, "no_such_column")).all()
+def test_the_peers_are_the_runs_of_that_kind_with_petscs_reasons(measurements, changed):
+    assert findings(measurements, NORMS)["peers"] == {}
+    peers = changed(measurements, {"config": "qp"}, solver="petsc_tao", converged_reason="CONVERGED_GATOL")
+    assert findings(peers, NORMS)["peers"] == {
+        "qp": {"label": "QP", "statuses": {"ok": 6}, "reasons": ["CONVERGED_GATOL"]}
+    }
+
+
+def test_calls_rejections_and_loaded_runs_are_counted_where_recorded(measurements, changed):
+    """A flag or a count a run did not record (None) counts as nothing."""
+    runs = changed(measurements, {"config": "qp", "tol_label": "1e-02"}, loaded=True, rejected=2, calls=5)
+    runs = changed(runs, {"config": "scs"}, loaded=None, rejected=None, calls=None)
+    p = findings(runs, NORMS)["protocol"]
+    assert (p["loaded"], p["rejected"], p["calls_max"]) == (3, 6, 5.0)
 
 
 def test_concurrent_jobs_counts_the_largest_overlap_of_job_intervals():
@@ -173,6 +175,6 @@ def test_kernel_spread_is_the_largest_range_of_the_job_medians_of_one_mesh():
         (21, "b", 2.0),
         (21, "c", np.nan),
     ]
-    df = pd.DataFrame(rows, columns=["N", "config", "ref_s"])
-    assert kernel_spread(df) == pytest.approx(0.1 / 1.05)
-    assert math.isnan(kernel_spread(df[df["N"] == 21].iloc[:1]))
+    runs = [Run(N, 1 / N, (N + 1) ** 2, config, "active_set", config, ref_s=ref) for N, config, ref in rows]
+    assert kernel_spread(runs) == pytest.approx(0.1 / 1.05)
+    assert math.isnan(kernel_spread(runs[4:5]))

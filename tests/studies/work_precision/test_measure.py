@@ -22,6 +22,7 @@ from signorini.studies.scene.norm import norm_stage
 from signorini.studies.scene.solve import solve_stage
 from signorini.studies.scene.store import SceneMesh, load_system
 from signorini.studies.work_precision import measure as wp
+from signorini.studies.work_precision.routes import Kind
 from signorini.studies.work_precision.study import study_configs
 
 OMP, OPENBLAS = THREAD_VARIABLES[0], THREAD_VARIABLES[2]  # two of the variables jobenv names
@@ -78,11 +79,12 @@ def test_p1_norms_of_zero_and_unsupported_names():
 
 
 def test_study_configs_add_installed_solvers():
-    study = {"configs": {"osqp": {"solver": "osqp", "label": "OSQP (polish)"}}, "qp_solvers": "installed"}
+    study = {"configs": {"osqp": {"solver": "cvxpy_osqp", "label": "OSQP (polish)"}}, "qp_solvers": "installed"}
     configs = study_configs(study, installed=["CLARABEL", "OSQP"])
     assert list(configs) == ["osqp", "clarabel"]
-    assert configs["osqp"].solver == "OSQP" and configs["osqp"].label == "OSQP (polish)"
-    assert configs["clarabel"].solver == "CLARABEL" and not configs["clarabel"].exact
+    assert configs["osqp"].solver == "cvxpy_osqp" and configs["osqp"].label == "OSQP (polish)"
+    assert configs["clarabel"].solver == "cvxpy_clarabel" and configs["clarabel"].label == "CLARABEL"
+    assert configs["clarabel"].kind is Kind.QP and not configs["clarabel"].exact
 
 
 def test_every_exact_route_is_an_exact_configuration():
@@ -173,8 +175,9 @@ def test_exact_solver_has_zero_algebraic_error(small_study):
 
 
 def test_qp_solver_runs_default_then_loose_to_tight(small_study):
-    recs = measure(small_study, {"solver": "OSQP", "options": {"polishing": False}}, tolerances=(1e-8, 1e-2))
+    recs = measure(small_study, {"solver": "cvxpy_osqp", "options": {"polishing": False}}, tolerances=(1e-8, 1e-2))
     assert [r["tol_label"] for r in recs] == ["default", "1e-02", "1e-08"]
+    assert {r["solver"] for r in recs} == {"OSQP"}  # the table names cvxpy's solver as cvxpy does
     assert recs[0]["is_default"] and not recs[1]["is_default"]
     assert all(r["status"] in ("ok", "inaccurate") for r in recs)
     assert recs[1]["alg_L4"] > recs[2]["alg_L4"] > 0.0  # a tighter tolerance, a smaller algebraic error
@@ -186,7 +189,7 @@ def test_qp_solver_runs_default_then_loose_to_tight(small_study):
 def test_failing_solver_is_recorded_not_raised(small_study, monkeypatch):
     import signorini.solvers
 
-    recs = measure(small_study, {"solver": "NOSUCH"}, out="nosuch.json")
+    recs = measure(small_study, {"solver": "cvxpy_nosuch"}, out="nosuch.json")
     assert {r["status"] for r in recs} == {"failed"}
     assert all("NOSUCH" in r["reason"] and "alg_L4" not in r for r in recs)
     assert np.isfinite(recs[0]["time_s"]) and recs[0]["disc_L4"] > 0
@@ -199,7 +202,7 @@ def test_failing_solver_is_recorded_not_raised(small_study, monkeypatch):
         return SolveResult(exact.copy(), np.zeros(B.size), B, 7, 0.01, cert, "cvxpy_fake")
 
     monkeypatch.setattr(signorini.solvers, "cvxpy_solve", sloppy)
-    recs = measure(small_study, {"solver": "OSQP"}, out="sloppy.json")
+    recs = measure(small_study, {"solver": "cvxpy_osqp"}, out="sloppy.json")
     assert [r["status"] for r in recs] == ["inaccurate", "inaccurate"]
     # the residual and the tolerance it missed are recorded as numbers, the reason names the kind
     assert [(r["reason"], r["kkt_worst"], r["kkt_required"]) for r in recs] == [
@@ -212,26 +215,12 @@ def test_failing_solver_is_recorded_not_raised(small_study, monkeypatch):
         raise NotConvergedError("cvxpy/OSQP returned status 'infeasible'")
 
     monkeypatch.setattr(signorini.solvers, "cvxpy_solve", raising)
-    recs = measure(small_study, {"solver": "OSQP"}, out="raising.json")
+    recs = measure(small_study, {"solver": "cvxpy_osqp"}, out="raising.json")
     assert [(r["status"], r["reason"]) for r in recs] == [("failed", "solver status infeasible")] * 2
 
 
 def test_previous_failure_skips_the_run(small_study):
-    measure(small_study, {"solver": "NOSUCH"}, out="prev.json")
-    recs = measure(small_study, {"solver": "NOSUCH"}, out="next.json", prev_json=small_study["dir"] / "prev.json")
+    measure(small_study, {"solver": "cvxpy_nosuch"}, out="prev.json")
+    recs = measure(small_study, {"solver": "cvxpy_nosuch"}, out="next.json", prev_json=small_study["dir"] / "prev.json")
     assert {r["status"] for r in recs} == {"skipped"}
     assert all(r["reason"].startswith("failed at N=12") for r in recs)
-
-
-def test_the_machine_record_reads_the_cpu_the_hypervisor_flag_and_the_threads(tmp_path):
-    cpuinfo = tmp_path / "cpuinfo"
-    cpuinfo.write_text("processor\t: 0\nmodel name\t: AMD EPYC\nflags\t\t: fpu sse2 hypervisor\n", encoding="utf-8")
-    product = tmp_path / "product_name"
-    product.write_text("KVM\n", encoding="utf-8")
-    record = wp.machine_record({OMP: "1"}, cpuinfo, product)
-    assert (record["cpu_model"], record["hypervisor"], record["product"]) == ("AMD EPYC", True, "KVM")
-    assert record["threads"][OMP] == "1" and record["threads"][OPENBLAS] == ""
-    cpuinfo.write_text("model name\t: Xeon\nflags\t\t: fpu sse2\n", encoding="utf-8")
-    assert wp.machine_record({}, cpuinfo, tmp_path / "missing")["hypervisor"] is False
-    unknown = wp.machine_record({}, tmp_path / "missing", tmp_path / "missing")
-    assert (unknown["cpu_model"], unknown["hypervisor"], unknown["product"]) == ("", None, "")

@@ -254,7 +254,7 @@ def test_peer_from_an_initial_guess(tmp_path, petsc_probe, name):
     Newton method and TAO TRON stop at once (≤ 1 iteration; the relative tests made absolute
     against the cold start's residual), from u = 0 they need more; the
     answer is certified like every other.  Timed under the protocol (CPU time of the solve)."""
-    from signorini.studies.work_precision.timing import Protocol, ReferenceKernel, Timer
+    from signorini.timing import Protocol, ReferenceKernel, Timer
 
     inputs = _system(tmp_path, 41)
     config = shipped_peers()[name]

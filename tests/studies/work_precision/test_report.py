@@ -4,22 +4,22 @@ from a measurement table; every verdict flips when the data it is computed from 
 
 from __future__ import annotations
 
+import dataclasses
 import json
-
-import pandas as pd
 
 from signorini.pipeline.jobenv import THREAD_VARIABLES
 from signorini.studies.work_precision.findings import findings
 from signorini.studies.work_precision.report import fmt_fit, fmt_ratio, fmt_timed, work_precision_md
-from signorini.studies.work_precision.timing import Protocol
+from signorini.studies.work_precision.table import Run
+from signorini.timing import Protocol
 
 OMP, OPENBLAS = THREAD_VARIABLES[0], THREAD_VARIABLES[2]  # two of the variables jobenv names
 
 NORMS = ["L4", "W14"]
 
 
-def _md(df: pd.DataFrame, protocol: Protocol | None = None, **kw) -> str:
-    return work_precision_md(df, findings(df, NORMS, protocol=protocol, **kw), protocol=protocol)
+def _md(runs: list[Run], protocol: Protocol | None = None, **kw) -> str:
+    return work_precision_md(runs, findings(runs, NORMS, protocol=protocol, **kw), protocol=protocol)
 
 
 def _table(md: str, heading: str) -> list[list[str]]:
@@ -51,16 +51,14 @@ def test_the_report_names_the_tolerance_that_keeps_table_1_and_every_failure(mea
     assert "- **Tolerance needed" in md and "QP 1e-06; none of the swept tolerances: SCS." in md
 
 
-def test_an_inaccurate_run_takes_the_solver_out_of_the_times(measurements):
-    df = measurements.copy()
-    df.loc[(df["config"] == "qp") & (df["tol_label"] == "1e-06") & (df["N"] == 20), "status"] = "inaccurate"
-    md = _md(df)
+def test_an_inaccurate_run_takes_the_solver_out_of_the_times(measurements, changed):
+    md = _md(changed(measurements, {"config": "qp", "tol_label": "1e-06", "N": 20}, status="inaccurate"))
     assert "(the selected tolerance): no solver at any swept tolerance." in md
     assert {r[0]: r[1] for r in _table(md, "Run time to Table 1's digits")}["QP"] == "none"
     assert "QP (1e-06)" not in _finding(md, "Fastest to Table 1's digits")
 
 
-def _race(run_row, samples_around, warm_other: float, width: float) -> pd.DataFrame:
+def _race(run_row, samples_around, warm_other: float, width: float) -> list[Run]:
     rows = []
     for N in (101, 201):
         rows += [
@@ -71,7 +69,7 @@ def _race(run_row, samples_around, warm_other: float, width: float) -> pd.DataFr
                 N, "tron_ws", "1e-08", samples_around(warm_other, width=width), start="cascade", solver="petsc_tao"
             ),
         ]
-    return pd.DataFrame(rows)
+    return rows
 
 
 def test_ties_and_the_fastest_follow_the_intervals(run_row, samples_around):
@@ -94,23 +92,25 @@ def test_ties_and_the_fastest_follow_the_intervals(run_row, samples_around):
         "1.1 s (0.945–1.2)",
         "tie (×0.93–1.2)",
     ]
-    one = _race(run_row, samples_around, 1.05, 0.1)
-    one.loc[one["config"].isin(["ours", "tron_ws"]), "times"] = one["time_s"].astype(str)  # one sample each
+    one = [  # one sample each
+        dataclasses.replace(r, times=str(r.time_s)) if r.config in ("ours", "tron_ws") else r
+        for r in _race(run_row, samples_around, 1.05, 0.1)
+    ]
     assert "(undetermined: one sample each)" in _finding(_md(one), "Fastest other solver to Table 1's digits, same")
 
 
-def test_the_eoc_verdict_follows_the_deviations(measurements):
+def test_the_eoc_verdict_follows_the_deviations(measurements, changed):
     """Published EOCs 2.3 and 1.7: the exact ones (2.0, 2.0) deviate by 0.3; once the QP solver's
     1e-02 run has exactly those EOCs it explains the column."""
     paper = {20: 2.3, 40: 1.7}
     far = _md(measurements, paper_l4_eoc=paper)
     assert "A single fixed QP tolerance of these solvers does not explain the published column." in far
-    df = measurements.copy()
-    loose = (df["config"] == "qp") & (df["tol_label"] == "1e-02")
-    e10 = float(df.loc[loose & (df["N"] == 10), "total_L4"].iloc[0])
-    e20, e40 = e10 / 2**2.3, e10 / 2**2.3 / 2**1.7
-    df.loc[loose & (df["N"] == 20), "total_L4"], df.loc[loose & (df["N"] == 40), "total_L4"] = e20, e40
-    close = _md(df, paper_l4_eoc=paper)
+    loose = {"config": "qp", "tol_label": "1e-02"}
+    e10 = next(r.total["L4"] for r in measurements if r.config == "qp" and r.tol_label == "1e-02" and r.N == 10)
+    runs = measurements
+    for N, e in ((20, e10 / 2**2.3), (40, e10 / 2**2.3 / 2**1.7)):
+        runs = changed(runs, {**loose, "N": N}, total={"L4": e, "W14": 0.2 / N})
+    close = _md(runs, paper_l4_eoc=paper)
     assert "QP at 1e-02 reproduces the published irregular EOCs markedly better than the exact solution" in close
     assert "does not explain the published column" not in close
 
@@ -118,16 +118,16 @@ def test_the_eoc_verdict_follows_the_deviations(measurements):
 def test_the_cost_of_accuracy_verdict_follows_the_slope(measurements):
     falling = _finding(_md(measurements), "Cost of accuracy")
     assert "one more correct digit in L⁴ costs ×3.2" in falling and "does not fall" not in falling
-    df = measurements.copy()
-    exact = df["config"] == "exact"
-    df.loc[exact, "time_s"] = 1.0 / df.loc[exact, "N"]  # the finer the mesh, the faster: errors fall as time grows
-    df.loc[exact, "times"] = df.loc[exact, "time_s"].map(lambda t: f"{t:.6g}")
-    df.loc[exact, "build_s"] = 0.0
-    flat = _finding(_md(df), "Cost of accuracy")
+    # the finer the mesh, the faster: errors fall as time grows
+    runs = [
+        dataclasses.replace(r, time_s=1.0 / r.N, times=f"{1.0 / r.N:.6g}", build_s=0.0) if r.config == "exact" else r
+        for r in measurements
+    ]
+    flat = _finding(_md(runs), "Cost of accuracy")
     assert "in L⁴ the error does not fall measurably with the run time" in flat
 
 
-def test_the_machine_is_named_only_as_recorded(measurements):
+def test_the_machine_is_named_only_as_recorded(measurements, changed):
     unrecorded = _finding(_md(measurements), "Machine and software")
     assert "The committed measurements did not record the machine" in unrecorded and "cores" in unrecorded
     assert f"The workflow sets `{OMP}`" in unrecorded and "PETSc 3" not in unrecorded
@@ -140,8 +140,8 @@ def test_the_machine_is_named_only_as_recorded(measurements):
         "threads": {OMP: "1"},
         "software": {"Python": "3.11.7"},
     }
-    df = measurements.assign(machine=json.dumps(record), peer_info="PETSc 3.18.5: tron")
-    recorded = _finding(_md(df), "Machine and software")
+    runs = changed(measurements, {}, machine=json.dumps(record), peer_info="PETSc 3.18.5: tron")
+    recorded = _finding(_md(runs), "Machine and software")
     assert recorded.startswith("- **Machine and software.** PETSc 3.18.5 (the PETSc peers' records)")
     assert "2 cores (2 usable), CPU AMD EPYC, virtualised (the CPU's hypervisor flag)" in recorded
     assert f"threads {OMP}=1; Python 3.11.7 (12 runs)" in recorded and "did not record" not in recorded
@@ -164,13 +164,28 @@ def test_times_ratios_and_exponents_are_printed_with_their_intervals():
     assert fmt_fit({"value": 1.05, "lo": 1.01, "hi": 1.11, "interval": True}) == "1.05 (1.01–1.11)"
 
 
-def test_inaccurate_answers_are_grouped_with_their_worst_ratio_from_the_recorded_numbers():
+def test_inaccurate_answers_are_grouped_with_their_worst_ratio_from_the_recorded_numbers(run_row):
     from signorini.studies.work_precision.report import _failure_rows
     from signorini.studies.work_precision.study import INACCURATE
 
-    rows = [
-        {"label": "OSQP", "status": "inaccurate", "reason": INACCURATE, "N": N, "tol_label": "1e-06", "kkt_worst": w}
+    bad = [
+        run_row(N, "osqp", "1e-06", [1.0], status="inaccurate", label="OSQP", kkt_worst=w, kkt_required=1e-6)
         for N, w in ((101, 3e-6), (201, 2.5e-5))
     ]
-    bad = pd.DataFrame([r | {"kkt_required": 1e-6} for r in rows])
     assert _failure_rows(bad) == [["OSQP", "inaccurate", "1e-06 at 101, 201", f"{INACCURATE} (up to ×25.0)"]]
+
+
+def test_the_template_holds_the_sections_the_report_fills_and_no_others(tmp_path):
+    """Every ``prose("…")`` of the report names a section of ``report.tmpl`` and every section is
+    used; a line ending in a backslash continues on the next, braces are doubled."""
+    import re
+    from pathlib import Path
+
+    from signorini.studies.work_precision import report
+
+    source = Path(report.__file__).read_text(encoding="utf-8")
+    used = set(re.findall(r'prose\(\s*"(\w+)"', source)) | {"fair_same_warm_start", "fair_cold_against_cold"}
+    assert used == set(report._sections())
+    template = tmp_path / "t.tmpl"
+    template.write_text("comment {x}\n@@ one\nA {x} \\\nB {{y}}\nC\n\n@@ two\nD\n", encoding="utf-8")
+    assert report._sections(template) == {"one": "A {x} B {{y}}\nC", "two": "D"}

@@ -9,10 +9,11 @@ import numpy as np
 import pytest
 
 from signorini.studies.work_precision import uncertainty as unc
+from signorini.studies.work_precision.table import Run
 
 
-def _run(times: str, time_s: float, N: int = 101, config: str = "a") -> dict:
-    return {"N": N, "config": config, "tol_label": "1e-08", "times": times, "time_s": time_s}
+def _run(times: str, time_s: float, N: int = 101, config: str = "a") -> Run:
+    return Run(N, 1 / (N + 1), (N + 1) ** 2, config, "OSQP", config, tol_label="1e-08", times=times, time_s=time_s)
 
 
 def test_samples_are_parsed_from_the_times_cell():

@@ -1,18 +1,25 @@
-"""Figures of the work-precision study, drawn on a given figure (or a new one) and returned;
-the stage ``work_precision_figures`` saves them."""
+"""Figures of the work-precision study, drawn from its runs (``table.Run``) on a given figure (or a
+new one) and returned; the stage ``work_precision_figures`` saves them."""
 
 from __future__ import annotations
 
 import itertools
+import math
 import os
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from signorini.plotting import new_figure, save, styled
 from signorini.published import PAPER_NORMS, label_tex
+from signorini.studies.work_precision.routes import Kind
 from signorini.studies.work_precision.study import FIGURE_NORMS, PEER_SOLVERS
-from signorini.studies.work_precision.table import tolerance_order
+from signorini.studies.work_precision.table import Run, tolerance_order
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 TOL_MARKERS = {"exact": "P", "default": "*", "1e-02": "o", "1e-04": "s", "1e-06": "^", "1e-08": "D", "1e-10": "v"}
 
@@ -34,12 +41,21 @@ MARKERS = ("o", "^", "D", "v", "P", "X", "<", ">", "p", "h", "d", "*")  # one pe
 ASSEMBLY = {"color": "0.3", "marker": "s"}
 
 
-def family(solver: str) -> str:
-    """A configuration's solver family: PETSc SNES, PETSc TAO or the QP solver's name."""
-    return FAMILIES.get(PEER_SOLVERS.get(solver, ""), solver)
+def family(run: Run) -> str:
+    """A run's solver family: PETSc SNES, PETSc TAO (a peer, by its kind of PETSc object) or the
+    solver as the table names it."""
+    return FAMILIES[PEER_SOLVERS[run.solver]] if run.kind is Kind.PEER else run.solver
 
 
-def figure_series(df, table1_norms: Sequence[str] | None = None) -> list[str]:
+def _fastest_by_config(runs: Sequence[Run]) -> dict[str, float]:
+    """Config → its fewest CPU seconds among ``runs`` (NaN: none timed), configs sorted."""
+    times: dict[str, list[float]] = {}
+    for r in runs:
+        times.setdefault(r.config, []).append(r.time_s)
+    return {c: min((t for t in times[c] if not math.isnan(t)), default=math.nan) for c in sorted(times)}
+
+
+def figure_series(runs: Sequence[Run], table1_norms: Sequence[str] | None = None) -> list[str]:
     """The configurations drawn: every exact one, and per other solver family the configuration
     whose selected run on the finest mesh (``selection``) is the fastest (none has a selected
     tolerance: the family's fastest run of status ok there; its first configuration otherwise).
@@ -49,30 +65,28 @@ def figure_series(df, table1_norms: Sequence[str] | None = None) -> list[str]:
     the fastest exact configuration of each start on the finest mesh; their runs are in the CSV and
     the report."""
     from signorini.published import TABLE1_NORMS
-    from signorini.studies.work_precision.findings import starts
     from signorini.studies.work_precision.selection import selected_runs
 
-    exact = list(dict.fromkeys(df.loc[df["tol_label"] == "exact", "config"]))
-    finest = int(df["N"].max())
-    norms = [n for n in (table1_norms or TABLE1_NORMS) if f"total_{n}" in df.columns]
-    selected = selected_runs(df, norms)
-    keeps = selected[selected["N"] == finest].set_index("config")["time_s"].to_dict()
-    last = df[(df["N"] == finest) & (df["status"] == "ok")]
+    exact = list(dict.fromkeys(r.config for r in runs if r.kind is Kind.EXACT))
+    finest = max(r.N for r in runs)
+    norms = [n for n in (table1_norms or TABLE1_NORMS) if n in runs[0].total]
+    keeps = {r.config: r.time_s for r in selected_runs(runs, norms) if r.N == finest}
+    last = [r for r in runs if r.N == finest and r.status == "ok"]
     chosen = list(exact)
-    others = df[~df["config"].isin(exact)]
-    for fam in dict.fromkeys(family(str(s)) for s in others["solver"]):
-        members = list(dict.fromkeys(others.loc[others["solver"].astype(str).map(family) == fam, "config"]))
-        if not (others.loc[others["config"].isin(members), "status"] == "ok").any():
+    others = [r for r in runs if r.config not in exact]
+    for fam in dict.fromkeys(family(r) for r in others):
+        members = list(dict.fromkeys(r.config for r in others if family(r) == fam))
+        if not any(r.status == "ok" for r in others if r.config in members):
             continue  # nothing but failures and skips: in the report, not on the axes
         candidates = {c: keeps[c] for c in members if c in keeps}
         if not candidates:
-            ok = last[last["config"].isin(members)]
-            candidates = ok.groupby("config")["time_s"].min().to_dict() if not ok.empty else {members[0]: 0.0}
+            ok = [r for r in last if r.config in members]
+            candidates = _fastest_by_config(ok) if ok else {members[0]: 0.0}
         chosen.append(min(candidates, key=candidates.get))
     if len(chosen) > MAX_SERIES:
-        start = dict(zip(df["config"], starts(df), strict=True))
-        solver = dict(zip(df["config"], df["solver"].astype(str), strict=True))
-        seconds = df[df["N"] == finest].groupby("config")["time_s"].min()
+        start = {r.config: r.start for r in runs}
+        solver = {r.config: r.solver for r in runs}
+        seconds = _fastest_by_config([r for r in runs if r.N == finest])
         fastest_first = sorted(exact, key=lambda c: seconds.get(c, float("inf")))
         # by route and start (the first configuration: the default backend), then by start (the fastest)
         for group, order in ((lambda c: (solver[c], start[c]), exact), (lambda c: start[c], fastest_first)):
@@ -82,30 +96,28 @@ def figure_series(df, table1_norms: Sequence[str] | None = None) -> list[str]:
     return chosen
 
 
-def _config_colors(df, configs: Sequence[str] | None = None) -> dict:
+def _config_colors(runs: Sequence[Run], configs: Sequence[str] | None = None) -> dict:
     """One Okabe–Ito colour per drawn configuration (cycled beyond eight)."""
-    configs = list(configs) if configs is not None else list(dict.fromkeys(df["config"]))
+    configs = list(configs) if configs is not None else list(dict.fromkeys(r.config for r in runs))
     return {c: OKABE_ITO[k % len(OKABE_ITO)] for k, c in enumerate(configs)}
 
 
-def _line_style(sub, config: str) -> str:
+def _line_style(runs: Sequence[Run], config: str) -> str:
     """Dashed for the PETSc peers, solid for the others."""
-    from signorini.studies.work_precision.findings import is_peer
-
-    return "--" if is_peer(sub[sub["config"] == config]).any() else "-"
+    return "--" if any(r.kind is Kind.PEER for r in runs if r.config == config) else "-"
 
 
-def _run_points(ax, sub, config: str, order, color, norm: str, floor: float) -> None:
+def _run_points(ax, sub: Sequence[Run], config: str, order, color, norm: str, floor: float) -> None:
     """One configuration's runs on one panel: a marker per tolerance, a line through the sweep
     (dashed for a PETSc peer)."""
     from matplotlib.transforms import blended_transform_factory
 
     top = blended_transform_factory(ax.transData, ax.transAxes)
-    runs = [sub[(sub["config"] == c) & (sub["tol_label"] == lab)] for c, lab in order if c == config]
+    runs = [next((r for r in sub if r.config == c and r.tol_label == lab), None) for c, lab in order if c == config]
     line_x, line_y = [], []
-    for r in (r.iloc[0] for r in runs if not r.empty):
-        t, e, status = float(r["time_s"]), float(r[f"alg_{norm}"]), str(r["status"])
-        marker = _marker(str(r["tol_label"]))
+    for r in (r for r in runs if r is not None):
+        t, e, status = r.time_s, r.alg[norm], r.status
+        marker = _marker(r.tol_label)
         if status == "failed" and np.isfinite(t):
             ax.plot([t], [0.96], marker="x", color=color, markersize=7, transform=top, clip_on=False)
             continue
@@ -125,14 +137,14 @@ def _run_points(ax, sub, config: str, order, color, norm: str, floor: float) -> 
             clip_on=False,
             zorder=3,
         )
-        if r["tol_label"] != "default":
+        if r.tol_label != "default":
             line_x.append(t)
             line_y.append(y)
     if len(line_x) > 1:
         ax.plot(line_x, line_y, color=color, linewidth=0.9, alpha=0.7, zorder=2, linestyle=_line_style(sub, config))
 
 
-def _legend_handles(df, configs, colors, order) -> tuple[list, list]:
+def _legend_handles(shown: Sequence[Run], configs, colors, order) -> tuple[list, list]:
     """(one handle per drawn configuration, the marker and line keys)."""
     from matplotlib.lines import Line2D
 
@@ -142,11 +154,11 @@ def _legend_handles(df, configs, colors, order) -> tuple[list, list]:
             [],
             color=colors[c],
             marker="o",
-            linestyle=_line_style(df, c),
-            label=str(df.loc[df["config"] == c, "label"].iloc[0]),
+            linestyle=_line_style(shown, c),
+            label=next(r.label for r in shown if r.config == c),
         )
         for c in configs
-        if (df["config"] == c).any()
+        if any(r.config == c for r in shown)
     ]
     names = {"exact": "exact (active set)", "default": "solver default"}
     keys = [
@@ -163,7 +175,9 @@ def _legend_handles(df, configs, colors, order) -> tuple[list, list]:
 
 
 @styled
-def work_precision_figure(df, figure_N: Sequence[int] = (), fig=None, configs: Sequence[str] | None = None):
+def work_precision_figure(
+    runs: Sequence[Run], figure_N: Sequence[int] = (), fig: Figure | None = None, configs: Sequence[str] | None = None
+) -> Figure:
     """Algebraic error ``‖u_h^solver − u_h^exact‖`` (rows: ``L⁴``, ``W^{1,4}``) against solve time,
     log-log, one panel column per ``N`` of ``figure_N`` (default: coarsest, middle, finest).
 
@@ -175,31 +189,31 @@ def work_precision_figure(df, figure_N: Sequence[int] = (), fig=None, configs: S
     failure.  The discretisation error of the mesh is the solid horizontal line, 10⁻⁴ of it
     (Table 1's fifth digit) the dotted one; an algebraic error of exactly 0 (the pipeline's own
     solve) sits on the bottom edge.  The legends sit below the panels.  Every configuration's
-    runs are in ``work_precision.csv`` and ``work_precision.md``.  ``df``: the rows of
+    runs are in ``work_precision.csv`` and ``work_precision.md``.  ``runs``: the rows of
     ``work_precision.csv``.  Returns the figure.
     """
     from matplotlib.ticker import NullFormatter
 
-    Ns = sorted(int(N) for N in df["N"].unique())
+    Ns = sorted({r.N for r in runs})
     cols = [int(N) for N in figure_N if int(N) in Ns] or sorted({Ns[0], Ns[len(Ns) // 2], Ns[-1]})
-    configs = list(configs) if configs is not None else figure_series(df)
-    shown = df[df["config"].isin(configs)]
+    configs = list(configs) if configs is not None else figure_series(runs)
+    shown = [r for r in runs if r.config in configs]
     order = tolerance_order(shown)
     ncol = 4 if len(cols) > 2 else 3
     solver_rows = -(-len(configs) // ncol) + 1  # the configurations and the legend's title
     key_rows = -(-(len(dict.fromkeys(lab for _, lab in order)) + 4) // 6)
     height = 6.4 + 0.24 * (solver_rows + key_rows)
     fig = fig if fig is not None else new_figure(figsize=(4.2 * len(cols), height))
-    colors = _config_colors(df, configs)
+    colors = _config_colors(runs, configs)
     axes = fig.subplots(len(FIGURE_NORMS), len(cols), squeeze=False, sharex="col")
     for i, norm in enumerate(FIGURE_NORMS):
-        alg_all = shown[f"alg_{norm}"].to_numpy(dtype=float)
+        alg_all = np.array([r.alg[norm] for r in shown], dtype=float)
         positive = alg_all[np.isfinite(alg_all) & (alg_all > 0)]
-        disc_min = float(df[f"disc_{norm}"].min())
+        disc_min = float(np.nanmin([r.disc[norm] for r in runs]))
         floor = min(float(positive.min()) if positive.size else disc_min, 1e-4 * disc_min) / 10.0
         for j, N in enumerate(cols):
-            ax, sub = axes[i, j], shown[shown["N"] == N]
-            disc = float(df.loc[df["N"] == N, f"disc_{norm}"].iloc[0])
+            ax, sub = axes[i, j], [r for r in shown if r.N == N]
+            disc = next(r.disc[norm] for r in runs if r.N == N)
             ax.axhline(disc, color="0.2", linewidth=1.2, zorder=1)
             ax.axhline(1e-4 * disc, color="0.2", linewidth=0.8, linestyle=":", zorder=1)
             for config in configs:
@@ -235,77 +249,76 @@ def work_precision_figure(df, figure_N: Sequence[int] = (), fig=None, configs: S
     return fig
 
 
-def _exact_runs(df):
-    """The first exact configuration's rows (the pipeline's solver), sorted by N."""
-    exact = df[df["tol_label"] == "exact"]
-    return exact[exact["config"] == exact["config"].iloc[0]].sort_values("N")
+def _exact_runs(runs: Sequence[Run]) -> list[Run]:
+    """The first exact configuration's runs (the pipeline's solver), sorted by N."""
+    exact = [r for r in runs if r.kind is Kind.EXACT]
+    return sorted((r for r in exact if r.config == exact[0].config), key=lambda r: r.N)
 
 
 @styled
-def cost_panel(df, ax=None):
+def cost_panel(runs: Sequence[Run], ax: Axes | None = None) -> Axes:
     """Total error ``‖u − u_h‖`` of the exact solver in every norm of the paper against total run
     time (assembly + solve) over the mesh sequence, log-log, with the fitted slope per norm (one
     colour and marker per norm)."""
     ax = ax if ax is not None else new_figure(figsize=(5.5, 4.6)).subplots()
-    ex = _exact_runs(df)
-    total = (ex["build_s"] + ex["time_s"]).to_numpy(dtype=float)
-    norms = [n for n in PAPER_NORMS if f"total_{n}" in ex.columns]
+    ex = _exact_runs(runs)
+    total = np.array([r.build_s + r.time_s for r in ex])
+    norms = [n for n in PAPER_NORMS if n in ex[0].total]
+    values = np.array([[r.total[n] for n in norms] for r in ex])  # runs × norms
     for k, norm in enumerate(norms):
-        e = ex[f"total_{norm}"].to_numpy(dtype=float)
+        e = values[:, k]
         slope = np.polyfit(np.log(total), np.log(e), 1)[0] if len(e) > 1 else float("nan")
         label = f"{label_tex(norm, domain=False)} (slope {slope:.2f})"
         ax.loglog(total, e, marker=MARKERS[k % len(MARKERS)], markersize=4, label=label)
-    e_all = ex[[f"total_{n}" for n in norms]]
     # each mesh's h above its largest error, horizontal; the limits leave room for these labels
     # (top), the legend (bottom) and the first and last label (left and right)
     # (every other one higher: neighbouring run times can be close)
-    tops = e_all.max(axis=1).to_numpy(dtype=float)
-    for k, (t, e, N) in enumerate(zip(total, tops, ex["N"], strict=True)):
+    tops = np.nanmax(values, axis=1)
+    for k, (t, e, N) in enumerate(zip(total, tops, [r.N for r in ex], strict=True)):
         ax.annotate(
             f"1/{N}", (t, e), textcoords="offset points", xytext=(0, 6 + 10 * (k % 2)), ha="center", fontsize="x-small"
         )
     ax.text(0.02, 0.98, "labels: mesh width $h$", transform=ax.transAxes, ha="left", va="top", fontsize="x-small")
-    values = e_all.to_numpy(dtype=float)
     ax.set_ylim(np.nanmin(values) / 300.0, np.nanmax(values) * 8.0)
     ax.set_xlim(total.min() / 1.8, total.max() * 1.8)
     ax.set_xlabel("total run time: assembly + solve [s]")
     ax.set_ylabel(r"total error $\|u - u_h\|$")
-    ax.set_title(f"Cost of accuracy: {ex['label'].iloc[0]}")
+    ax.set_title(f"Cost of accuracy: {ex[0].label}")
     ax.grid(True, which="major", linewidth=0.3, alpha=0.6)
     ax.legend(fontsize=8, loc="lower left", ncol=2)
     return ax
 
 
-def time_series(df, table1_norms: Sequence[str] | None = None) -> dict[str, dict]:
+def time_series(runs: Sequence[Run], table1_norms: Sequence[str] | None = None) -> dict[str, dict]:
     """The solve-time series of ``time_panel``: the selected runs (``selection``) of every exact
     configuration and of the PETSc peers ``figure_series`` draws, each with its times, their
     intervals, its exponent ``p`` (time ∝ unknowns^p), and a colour and marker of its own (the
     colours of ``work_precision_figure``; ``EXTRA_COLORS`` for the rest)."""
     from signorini.published import TABLE1_NORMS
     from signorini.studies.work_precision import uncertainty as unc
-    from signorini.studies.work_precision.findings import is_peer
     from signorini.studies.work_precision.selection import selected_runs
 
-    norms = [n for n in (table1_norms or TABLE1_NORMS) if f"total_{n}" in df.columns]
-    drawn = figure_series(df, norms)
-    palette = _config_colors(df, drawn)
+    norms = [n for n in (table1_norms or TABLE1_NORMS) if n in runs[0].total]
+    drawn = figure_series(runs, norms)
+    palette = _config_colors(runs, drawn)
     extra = itertools.cycle(EXTRA_COLORS)
-    sel = selected_runs(df, norms)
-    exact = list(dict.fromkeys(sel.loc[sel["tol_label"] == "exact", "config"]))
-    peers = [c for c in dict.fromkeys(sel.loc[is_peer(sel), "config"]) if c in drawn]
+    sel = selected_runs(runs, norms)
+    exact = list(dict.fromkeys(r.config for r in sel if r.kind is Kind.EXACT))
+    peers = [c for c in dict.fromkeys(r.config for r in sel if r.kind is Kind.PEER) if c in drawn]
     series = {}
     for k, config in enumerate(exact + peers):
-        rows = sel[sel["config"] == config].sort_values("N")
-        times = [unc.run_time(r) for _, r in rows.iterrows()]
+        rows = sorted((r for r in sel if r.config == config), key=lambda r: r.N)
+        times = [unc.run_time(r) for r in rows]
         bounds = np.array([t.interval or (t.value, t.value) for t in times])
+        n_dofs = np.array([r.n_dofs for r in rows], dtype=float)
         series[config] = {
-            "label": str(rows["label"].iloc[0]),
+            "label": rows[0].label,
             "peer": config in peers,
-            "n_dofs": rows["n_dofs"].to_numpy(dtype=float),
+            "n_dofs": n_dofs,
             "time_s": np.array([t.value for t in times]),
             "lo": bounds[:, 0],
             "hi": bounds[:, 1],
-            "p": unc.exponent(list(rows["n_dofs"].astype(float)), times).value,
+            "p": unc.exponent(list(n_dofs), times).value,
             "color": palette.get(config) or next(extra),
             "marker": MARKERS[k % len(MARKERS)],
         }
@@ -313,15 +326,16 @@ def time_series(df, table1_norms: Sequence[str] | None = None) -> dict[str, dict
 
 
 @styled
-def time_panel(df, ax=None):
+def time_panel(runs: Sequence[Run], ax: Axes | None = None) -> Axes:
     """Where the time goes: assembly and the selected runs of the exact configurations against the
     unknowns; dashed: the drawn PETSc peers' selected runs, with their exponents (``time_series``);
     bars: the times' intervals (``uncertainty``); the legend below the axes."""
     ax = ax if ax is not None else new_figure(figsize=(5.5, 6.0)).subplots()
-    ex = _exact_runs(df)
-    n = ex["n_dofs"].to_numpy(dtype=float)
-    handles = ax.loglog(n, ex["build_s"], **ASSEMBLY, label="assembly (mesh, A, b)")
-    for v in time_series(df).values():
+    ex = _exact_runs(runs)
+    n = np.array([r.n_dofs for r in ex], dtype=float)
+    build = np.array([r.build_s for r in ex])
+    handles = ax.loglog(n, build, **ASSEMBLY, label="assembly (mesh, A, b)")
+    for v in time_series(runs).values():
         label = f"{v['label']} ($p$ = {v['p']:.2f})" if v["peer"] else f"solve: {v['label']}"
         bars = ax.errorbar(
             v["n_dofs"],
@@ -336,7 +350,7 @@ def time_panel(df, ax=None):
         )
         handles.append(bars)
     handles += ax.loglog(
-        n, float(ex["build_s"].iloc[0]) * n / n[0], linestyle=":", color="0.6", label=r"$\propto$ unknowns"
+        n, build[0] * n / n[0], linestyle=":", color="0.6", label=r"$\propto$ unknowns"
     )
     ax.set_xlabel("unknowns $(N+1)^2$")
     ax.set_ylabel(TIME_LABEL.replace("solve time", "time"))
@@ -350,14 +364,14 @@ def time_panel(df, ax=None):
 
 
 @styled
-def cost_of_accuracy(df, fig=None):
-    """``cost_panel`` (left) and ``time_panel`` (right) side by side.  ``df``: ``work_precision.csv``."""
+def cost_of_accuracy(runs: Sequence[Run], fig: Figure | None = None) -> Figure:
+    """``cost_panel`` (left) and ``time_panel`` (right) side by side.  ``runs``: ``work_precision.csv``."""
     from matplotlib.ticker import NullFormatter
 
     fig = fig if fig is not None else new_figure(figsize=(11.0, 5.6))
     ax, ax2 = fig.subplots(1, 2)
-    cost_panel(df, ax)
-    time_panel(df, ax2)
+    cost_panel(runs, ax)
+    time_panel(runs, ax2)
     rows = -(-len(ax2.get_legend_handles_labels()[0]) // 2)  # time_panel's legend below it
     fig.set_size_inches(11.0, 4.6 + 0.17 * rows)
     for a in (ax, ax2):
@@ -368,8 +382,8 @@ def cost_of_accuracy(df, fig=None):
 
 def figures_stage(csv_path: str | os.PathLike, figure_N: Sequence[int], outs) -> None:
     """Stage ``work_precision_figures`` (``outs``: ``pdf``, ``png``, ``cost_pdf``, ``cost_png``)."""
-    from signorini.studies.work_precision.table import read_measurements
+    from signorini.studies.work_precision.table import read_runs
 
-    df = read_measurements(csv_path)
-    save(work_precision_figure(df, figure_N), outs["pdf"], outs["png"])
-    save(cost_of_accuracy(df), outs["cost_pdf"], outs["cost_png"])
+    runs = read_runs(csv_path)
+    save(work_precision_figure(runs, figure_N), outs["pdf"], outs["png"])
+    save(cost_of_accuracy(runs), outs["cost_pdf"], outs["cost_png"])

@@ -1,13 +1,6 @@
-"""Findings of the work-precision study: what ``work_precision.md`` states, in numbers.
-
-Computed from the measurement table (``work_precision.csv``): how many Table 1 cells each
-(solver, tolerance) changes in their printed 5 significant digits, each configuration's selected
-tolerance and selected runs (``selection``: the one rule behind every time, ratio, ranking and
-exponent), the fastest selected run and the comparisons from the same start with their intervals
-(``uncertainty``), the exponents of time against unknowns, the ``L⁴`` EOCs of the inexact solutions
-against the published Table 2 column, the published ``L⁴`` cells each run comes closest to, the
-exact solver's cost per digit, what the timing protocol did, and what the table records of the
-machine and the software.  ``report`` renders them.
+"""Findings of the work-precision study: what ``work_precision.md`` states, in numbers
+(``findings``), computed from the runs of the measurement table (``table.Run``) through one
+selection rule (``selection``) and the intervals of ``uncertainty``; ``report`` renders them.
 
 Times are ranked and divided in CPU seconds (``time_s``), not in the reference units
 (``time_ref``): on this machine the reference kernel's time varies from sample to sample about as
@@ -19,57 +12,56 @@ from __future__ import annotations
 
 import json
 import math
+from collections import Counter
 from collections.abc import Mapping, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from signorini.studies.work_precision import uncertainty as unc
+from signorini.studies.work_precision.routes import Kind
 from signorini.studies.work_precision.selection import digits_unchanged, keeps_digits, printed, selected_tolerances
-from signorini.studies.work_precision.study import EXACT_LABEL, PEER_SOLVERS
-from signorini.studies.work_precision.table import tolerance_order
-from signorini.studies.work_precision.timing import Protocol
-
-if TYPE_CHECKING:
-    import pandas as pd
+from signorini.studies.work_precision.study import EXACT_LABEL
+from signorini.studies.work_precision.table import Run, tolerance_order
+from signorini.timing import Protocol
 
 STOPS = ("spread", "budget", "max_repeats", "answer rejected")  # ``time_stop``: why a run's sampling ended
+NAN = math.nan
 
 
-def _runs(df: pd.DataFrame, config: str, label: str) -> pd.DataFrame:
-    """The rows of one (configuration, tolerance) indexed by N."""
-    return df[(df["config"] == config) & (df["tol_label"] == label)].set_index("N")
+def _by_mesh(runs: Sequence[Run], config: str, label: str) -> dict[int, Run]:
+    """The runs of one (configuration, tolerance) by N."""
+    return {r.N: r for r in runs if r.config == config and r.tol_label == label}
 
 
-def _time(row: Mapping | None) -> dict:
+def _time(run: Run | None) -> dict:
     """A run's time with its interval (``uncertainty``) and its number of samples; NaN without a run."""
-    if row is None or not math.isfinite(float(row["time_s"])):
-        return {"value": math.nan, "lo": math.nan, "hi": math.nan, "interval": False, "samples": 0}
-    return {**unc.run_time(row).summary(), "samples": int(unc.samples(row.get("times")).size)}
+    if run is None or not math.isfinite(run.time_s):
+        return {"value": NAN, "lo": NAN, "hi": NAN, "interval": False, "samples": 0}
+    return {**unc.run_time(run).summary(), "samples": int(unc.samples(run.times).size)}
 
 
-def _cell_changes(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str], chosen: Mapping) -> list[dict]:
+def _cell_changes(runs: Sequence[Run], Ns: Sequence[int], t1: Sequence[str], chosen: Mapping) -> list[dict]:
     """Per (config, tolerance): Table 1 cells printed differently, worst relative change, statuses,
     the meshes on which the run keeps Table 1's digits, whether it is the selected tolerance."""
     cells = []
-    for config, label in tolerance_order(df):
-        sub = _runs(df, config, label)
+    for config, label in tolerance_order(runs):
+        by = _by_mesh(runs, config, label)
         changed, worst, answered, keeping = 0, 0.0, True, 0
         for N in Ns:
-            row = sub.loc[N] if N in sub.index else None
-            if row is None or digits_unchanged(row, t1) is None:
+            run = by.get(N)
+            if run is None or digits_unchanged(run, t1) is None:
                 answered = False
                 continue
-            keeping += keeps_digits(row, t1)
+            keeping += keeps_digits(run, t1)
             for n in t1:
-                ours, ref = float(row[f"total_{n}"]), float(row[f"disc_{n}"])
-                changed += printed(ours) != printed(ref)
-                worst = max(worst, abs(ours / ref - 1.0))
-        last = sub.loc[Ns[-1]] if Ns[-1] in sub.index else None
+                changed += printed(run.total[n]) != printed(run.disc[n])
+                worst = max(worst, abs(run.total[n] / run.disc[n] - 1.0))
+        last = by.get(Ns[-1])
         cells.append(
             {
                 "config": config,
-                "label": str(sub.iloc[0]["label"]),
+                "label": next(iter(by.values())).label,
                 "tol_label": label,
                 "exact": label == EXACT_LABEL,
                 "answered": answered,
@@ -78,11 +70,9 @@ def _cell_changes(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str], chosen
                 "worst_rel_change": worst,
                 "keeping": keeping,
                 "selected": chosen.get(config) == label,
-                "statuses": [str(sub.loc[N, "status"]) if N in sub.index else "—" for N in Ns],
-                "time_last": _time(None if last is None else {**last.to_dict(), "N": Ns[-1]}),
-                "alg_L4_rel_last": (
-                    float(last["alg_L4"] / last["disc_L4"]) if last is not None and "alg_L4" in sub else math.nan
-                ),
+                "statuses": [by[N].status if N in by else "—" for N in Ns],
+                "time_last": _time(last),
+                "alg_L4_rel_last": last.alg["L4"] / last.disc["L4"] if last is not None else NAN,
             }
         )
     return cells
@@ -90,16 +80,15 @@ def _cell_changes(df: pd.DataFrame, Ns: Sequence[int], t1: Sequence[str], chosen
 
 class Selected:
     """The selected runs (``selection``) with their times' bootstrap (``uncertainty.run_time``):
-    ``tolerance`` per configuration, ``est[(config, N)]``, ``row[(config, N)]``."""
+    ``tolerance`` per configuration, ``est[(config, N)]``, ``run[(config, N)]``."""
 
-    def __init__(self, df: pd.DataFrame, t1: Sequence[str]):
-        self.tolerance = selected_tolerances(df, t1)
+    def __init__(self, runs: Sequence[Run], t1: Sequence[str]):
+        self.tolerance = selected_tolerances(runs, t1)
         self.est: dict[tuple[str, int], unc.Estimate] = {}
-        self.row: dict[tuple[str, int], Mapping] = {}
-        for _, r in df.iterrows():
-            if self.tolerance.get(r["config"]) == r["tol_label"]:
-                key = (str(r["config"]), int(r["N"]))
-                self.est[key], self.row[key] = unc.run_time(r), r
+        self.run: dict[tuple[str, int], Run] = {}
+        for r in runs:
+            if self.tolerance.get(r.config) == r.tol_label:
+                self.est[(r.config, r.N)], self.run[(r.config, r.N)] = unc.run_time(r), r
 
     def at(self, N: int, configs: Sequence[str] | None = None) -> dict[str, unc.Estimate]:
         """Config → time estimate of the selected runs at ``N`` (of ``configs``, default all)."""
@@ -107,13 +96,9 @@ class Selected:
 
     def entry(self, config: str, N: int) -> dict:
         """The selected run's tolerance and time (with interval and samples)."""
-        samples = int(unc.samples(self.row[(config, N)].get("times")).size)
-        return {
-            "config": config,
-            "tol_label": self.tolerance[config],
-            **self.est[(config, N)].summary(),
-            "samples": samples,
-        }
+        samples = int(unc.samples(self.run[(config, N)].times).size)
+        summary = self.est[(config, N)].summary()
+        return {"config": config, "tol_label": self.tolerance[config], **summary, "samples": samples}
 
 
 def _ratio(num: unc.Estimate, den: unc.Estimate) -> dict:
@@ -130,24 +115,20 @@ def _fastest(sel: Selected, N: int) -> list[dict]:
     ]
 
 
-def starts(df: pd.DataFrame) -> pd.Series:
-    """Each row's start: ``cascade`` (the cascade's interpolated coarse solution) or ``cold``."""
-    return df["start"].astype(str)
-
-
-def _fair_race(df: pd.DataFrame, Ns: Sequence[int], sel: Selected) -> dict[str, list[dict]]:
+def _fair_race(runs: Sequence[Run], Ns: Sequence[int], sel: Selected) -> dict[str, list[dict]]:
     """Per N, two comparisons of our fastest exact configuration (direct or multigrid route) with
     the fastest other configuration, both by their selected runs' median times: ``same_warm_start``
     — ours from the cascade against the solvers started from the cascade's interpolated coarse
     solution (the start's cost included) — and ``cold_against_cold`` — ours from the cold start
     against the others from u = 0.  The ratio (other / ours) with its interval and verdict; empty
     without the selected runs of a side."""
-    start = starts(df)
-    exact = df["tol_label"] == EXACT_LABEL
+    def side(start: str, exact: bool) -> list[str]:
+        mine = dict.fromkeys(r.config for r in runs if r.start == start and (r.kind is Kind.EXACT) == exact)
+        return [c for c in mine if sel.tolerance.get(c)]
+
     out: dict[str, list[dict]] = {}
-    for key, kind in (("same_warm_start", "cascade"), ("cold_against_cold", "cold")):
-        ours = [c for c in dict.fromkeys(df.loc[exact & (start == kind), "config"]) if sel.tolerance.get(c)]
-        others = [c for c in dict.fromkeys(df.loc[~exact & (start == kind), "config"]) if sel.tolerance.get(c)]
+    for key, start in (("same_warm_start", "cascade"), ("cold_against_cold", "cold")):
+        ours, others = side(start, True), side(start, False)
         if not ours or not others:
             continue
         rows = []
@@ -163,20 +144,21 @@ def _fair_race(df: pd.DataFrame, Ns: Sequence[int], sel: Selected) -> dict[str, 
     return out
 
 
-def _scaling(df: pd.DataFrame, Ns: Sequence[int], sel: Selected) -> dict[str, dict]:
+def _scaling(runs: Sequence[Run], Ns: Sequence[int], sel: Selected) -> dict[str, dict]:
     """Per configuration with a selected tolerance: the exponent ``p`` of ``time ∝ unknowns^p``,
     least squares through its selected runs on every mesh, with its interval."""
-    n_dofs = df.drop_duplicates("N").set_index("N")["n_dofs"]
-    out = {}
-    for config, label in sel.tolerance.items():
-        if label is not None:
-            fit = unc.exponent([float(n_dofs[N]) for N in Ns], [sel.est[(config, N)] for N in Ns])
-            out[config] = fit.summary()
-    return out
+    n_dofs: dict[int, int] = {}
+    for r in runs:
+        n_dofs.setdefault(r.N, r.n_dofs)
+    return {
+        config: unc.exponent([float(n_dofs[N]) for N in Ns], [sel.est[(config, N)] for N in Ns]).summary()
+        for config, label in sel.tolerance.items()
+        if label is not None
+    }
 
 
 def _l4_eocs(
-    df: pd.DataFrame, Ns: Sequence[int], paper_rates: Sequence[float] | None, paper_l4: Mapping[int, float] | None
+    runs: Sequence[Run], Ns: Sequence[int], paper_rates: Sequence[float] | None, paper_l4: Mapping[int, float] | None
 ) -> list[dict]:
     """Per (config, tolerance) with an answer on every mesh (whatever its status: the question is
     what inexact solves do to the EOCs): the ``L⁴`` EOCs and their largest deviations from the
@@ -185,30 +167,30 @@ def _l4_eocs(
 
     h = np.array([1.0 / N for N in Ns])
     eocs, exact_eoc = [], None
-    for config, label in tolerance_order(df):
-        sub = _runs(df, config, label)
-        if "total_L4" not in sub.columns or len(Ns) < 2 or any(N not in sub.index for N in Ns):
+    for config, label in tolerance_order(runs):
+        by = _by_mesh(runs, config, label)
+        if len(Ns) < 2 or any(N not in by for N in Ns):
             continue
-        e = np.array([float(sub.loc[N, "total_L4"]) for N in Ns])
+        e = np.array([by[N].total["L4"] for N in Ns])
         if not np.all(np.isfinite(e)):
             continue
         rates = eoc(h, e)[1:]
-        entry = {"config": config, "label": str(sub.iloc[0]["label"]), "tol_label": label, "eoc": rates.tolist()}
+        entry = {"config": config, "label": by[Ns[0]].label, "tol_label": label, "eoc": rates.tolist()}
         entry["max_dev_paper"] = (
             float(np.nanmax(np.abs(rates - np.asarray(paper_rates))))
             if paper_rates and np.isfinite(paper_rates).any()
-            else math.nan
+            else NAN
         )
         if paper_l4:
             entry["l4_dev_paper"] = [
-                float(e[k] / paper_l4[N] - 1.0) if N in paper_l4 else math.nan for k, N in enumerate(Ns)
+                float(e[k] / paper_l4[N] - 1.0) if N in paper_l4 else NAN for k, N in enumerate(Ns)
             ]
         if label == EXACT_LABEL and exact_eoc is None:
             exact_eoc = rates
         eocs.append(entry)
     for entry in eocs:
         entry["max_dev_exact"] = (
-            float(np.max(np.abs(np.asarray(entry["eoc"]) - exact_eoc))) if exact_eoc is not None else math.nan
+            float(np.max(np.abs(np.asarray(entry["eoc"]) - exact_eoc))) if exact_eoc is not None else NAN
         )
     return eocs
 
@@ -220,20 +202,20 @@ def _exact_cost(Ns: Sequence[int], sel: Selected) -> dict[str, Any]:
     first = next((c for c, lab in sel.tolerance.items() if lab == EXACT_LABEL), None)
     if first is None:
         return {}
-    rows = [sel.row[(first, N)] for N in Ns]
-    build = [float(r["build_s"]) for r in rows]
+    runs = [sel.run[(first, N)] for N in Ns]
+    build = [r.build_s for r in runs]
     total = [unc.shifted(sel.est[(first, N)], b) for N, b in zip(Ns, build, strict=True)]
     exact = {
         "config": first,
-        "label": str(rows[0]["label"]),
+        "label": runs[0].label,
         "N": list(Ns),
         "build_s": build,
-        "time": [_time(r) for r in rows],
+        "time": [_time(r) for r in runs],
         "total_time": [t.summary() for t in total],
     }
     for n in ("L4", "W14"):
-        if f"total_{n}" in rows[0] and len(rows) >= 2:
-            err = [float(r[f"total_{n}"]) for r in rows]
+        if n in runs[0].total and len(runs) >= 2:
+            err = [r.total[n] for r in runs]
             slope = unc.exponent(total, err).summary()
             exact[f"total_{n}"] = err
             exact[f"slope_{n}"] = slope
@@ -243,83 +225,83 @@ def _exact_cost(Ns: Sequence[int], sel: Selected) -> dict[str, Any]:
     return exact
 
 
-def _closest_l4(df: pd.DataFrame, paper_l4: Mapping[int, float] | None) -> dict[int, dict]:
+def _closest_l4(runs: Sequence[Run], paper_l4: Mapping[int, float] | None) -> dict[int, dict]:
     """Per N with a published ``L⁴`` cell, the run whose total ``L⁴`` error is closest to it."""
     closest: dict[int, dict] = {}
-    for N, published in (paper_l4 or {}).items() if "total_L4" in df.columns else ():
-        rows = df[(df["N"] == N) & np.isfinite(df["total_L4"])]
-        if rows.empty:
+    for N, published in (paper_l4 or {}).items():
+        rows = [r for r in runs if r.N == N and np.isfinite(r.total["L4"])]
+        if not rows:
             continue
-        dev = (rows["total_L4"] / published - 1.0).to_numpy(dtype=float)
+        dev = np.array([r.total["L4"] for r in rows]) / published - 1.0
         k = int(np.argmin(np.abs(dev)))
-        exact_rows = rows[rows["tol_label"] == EXACT_LABEL]
+        exact = [r for r in rows if r.tol_label == EXACT_LABEL]
         closest[int(N)] = {
             "paper": float(published),
-            "label": str(rows["label"].iloc[k]),
-            "tol_label": str(rows["tol_label"].iloc[k]),
-            "status": str(rows["status"].iloc[k]),
-            "value": float(rows["total_L4"].iloc[k]),
+            "label": rows[k].label,
+            "tol_label": rows[k].tol_label,
+            "status": rows[k].status,
+            "value": rows[k].total["L4"],
             "dev": float(dev[k]),
-            "exact_dev": float(exact_rows["total_L4"].iloc[0] / published - 1.0) if len(exact_rows) else math.nan,
+            "exact_dev": float(exact[0].total["L4"] / published - 1.0) if exact else NAN,
         }
     return closest
 
 
-def is_peer(df: pd.DataFrame) -> pd.Series:
-    """The rows of PETSc peers (``solver`` one of ``study.PEER_SOLVERS``)."""
-    return df["solver"].astype(str).isin(PEER_SOLVERS)
-
-
-def _peers(df: pd.DataFrame) -> dict[str, dict]:
+def _peers(runs: Sequence[Run]) -> dict[str, dict]:
     """Per PETSc peer configuration: its label, the statuses of all its runs, PETSc's reasons."""
-    peers = df[is_peer(df)]
-    return {
-        config: {
-            "label": str(rows["label"].iloc[0]),
-            "statuses": rows["status"].value_counts().to_dict(),
-            "reasons": sorted({str(r) for r in rows["converged_reason"] if str(r) and str(r) != "nan"}),
+    out = {}
+    for config in dict.fromkeys(r.config for r in runs if r.kind is Kind.PEER):
+        mine = [r for r in runs if r.config == config]
+        out[config] = {
+            "label": mine[0].label,
+            "statuses": dict(Counter(r.status for r in mine)),
+            "reasons": sorted({r.converged_reason for r in mine if r.converged_reason}),
         }
-        for config, rows in peers.groupby("config", sort=False)
-    }
+    return out
 
 
-def kernel_spread(df: pd.DataFrame) -> float:
+def _numbers(runs: Sequence[Run], name: str) -> np.ndarray:
+    """A field of the runs as floats (a flag as 0/1; missing: NaN)."""
+    return np.array([NAN if (v := getattr(r, name)) is None else float(v) for r in runs], dtype=float)
+
+
+def kernel_spread(runs: Sequence[Run]) -> float:
     """The largest relative range (max − min) / median, over the meshes, of the reference kernel's
     CPU time between the jobs of one mesh (each job: the median over its runs): an upper estimate
     of how much the whole machine's speed changed between those jobs (the kernel's own noise
     included); NaN without two timed jobs on one mesh."""
-    ref = pd_numeric(df, "ref_s")
-    timed = df.assign(_ref=ref)[np.isfinite(ref)]
-    per_job = timed.groupby(["N", "config"])["_ref"].median()
-    ranges = [
-        (float(v.max()) - float(v.min())) / float(v.median())
-        for _, v in per_job.groupby(level="N")
-        if len(v) > 1 and float(v.median()) > 0
-    ]
-    return max(ranges) if ranges else math.nan
+    jobs: dict[tuple[int, str], list[float]] = {}
+    for r in runs:
+        if math.isfinite(r.ref_s):
+            jobs.setdefault((r.N, r.config), []).append(r.ref_s)
+    meshes: dict[int, list[float]] = {}
+    for (N, _), refs in jobs.items():
+        meshes.setdefault(N, []).append(float(np.median(refs)))
+    ranges = [(max(v) - min(v)) / float(np.median(v)) for v in meshes.values() if len(v) > 1 and np.median(v) > 0]
+    return max(ranges) if ranges else NAN
 
 
-def _protocol(df: pd.DataFrame, protocol: Protocol) -> dict[str, Any]:
+def _protocol(runs: Sequence[Run], protocol: Protocol) -> dict[str, Any]:
     """What the timing protocol did: why each timed run's sampling stopped (``time_stop``), how many
     samples the runs with an answer have, the median relative spread of their samples (runs with
     two or more), overall and for the runs short enough that the budget holds ``min_repeats``
     samples; calls per sample, samples rejected and redone, runs accepted under load, CPU share."""
-    timed = df[df["status"] != "skipped"]
-    stop = timed["time_stop"].fillna("").astype(str)
-    answered = timed[timed["status"].isin(["ok", "inaccurate"])]
-    counts = answered["times"].map(lambda t: unc.samples(t).size).to_numpy(dtype=int)
-    spread, seconds = pd_numeric(answered, "spread"), answered["time_s"].to_numpy(dtype=float)
+    timed = [r for r in runs if r.status != "skipped"]
+    stop = [r.time_stop for r in timed]
+    answered = [r for r in timed if r.status in ("ok", "inaccurate")]
+    counts = np.array([unc.samples(r.times).size for r in answered], dtype=int)
+    spread, seconds = _numbers(answered, "spread"), _numbers(answered, "time_s")
     several = counts >= 2
     short_s = protocol.budget_s / protocol.min_repeats
 
     def median(values: np.ndarray) -> float:
-        return float(np.median(values)) if values.size else math.nan
+        return float(np.median(values)) if values.size else NAN
 
-    share, calls = pd_numeric(timed, "cpu_share"), pd_numeric(timed, "calls")
+    share, calls = _numbers(timed, "cpu_share"), _numbers(timed, "calls")
     return {
-        "timed": int((stop != "").sum()),
-        "stops": {k: int((stop == k).sum()) for k in STOPS},
-        "raised": int((stop == "").sum()),  # failed at the first call, before any summary
+        "timed": len(stop) - stop.count(""),
+        "stops": {k: stop.count(k) for k in STOPS},
+        "raised": stop.count(""),  # failed at the first call, before any summary
         "answered": int(counts.size),
         "samples": {int(k): int(v) for k, v in zip(*np.unique(counts, return_counts=True), strict=True)},
         "samples_min": int(counts.min()) if counts.size else 0,
@@ -331,23 +313,11 @@ def _protocol(df: pd.DataFrame, protocol: Protocol) -> dict[str, Any]:
         "spread_median_short": median(spread[several & (seconds < short_s)]),
         "short": int((several & (seconds < short_s)).sum()),
         "calls_max": float(np.nanmax(calls)) if np.isfinite(calls).any() else 1.0,
-        "rejected": int(np.nansum(pd_numeric(timed, "rejected"))),
-        "loaded": int(np.nansum(pd_numeric(timed, "loaded"))),
-        "cpu_share_median": float(np.nanmedian(share)) if np.isfinite(share).any() else math.nan,
+        "rejected": int(np.nansum(_numbers(timed, "rejected"))),
+        "loaded": int(np.nansum(_numbers(timed, "loaded"))),
+        "cpu_share_median": float(np.nanmedian(share)) if np.isfinite(share).any() else NAN,
         "kernel_spread": kernel_spread(timed),
     }
-
-
-def pd_numeric(df: pd.DataFrame, name: str) -> np.ndarray:
-    """A column as floats (booleans as 0/1, missing as NaN)."""
-    import pandas as pd
-
-    if name not in df.columns:
-        return np.full(len(df), math.nan)
-    col = df[name]
-    if col.dtype == object:
-        col = col.map({True: 1.0, False: 0.0, "True": 1.0, "False": 0.0})
-    return pd.to_numeric(col, errors="coerce").to_numpy(dtype=float)
 
 
 def concurrent_jobs(starts: np.ndarray, ends: np.ndarray) -> int:
@@ -362,45 +332,47 @@ def concurrent_jobs(starts: np.ndarray, ends: np.ndarray) -> int:
     return peak
 
 
-def _software(df: pd.DataFrame) -> dict[str, Any]:
+def _software(runs: Sequence[Run]) -> dict[str, Any]:
     """What the table records of the machine and the software: the PETSc versions of the peers'
-    runs (``peer_info``), and the distinct machine records (``machine``, JSON; absent from tables
+    runs (``peer_info``), and the distinct machine records (``machine``, JSON; empty in a table
     measured before it was recorded) with the number of runs of each."""
-    petsc = sorted({str(v).split(":")[0] for v in df["peer_info"] if str(v).startswith("PETSc")})
-    column = df["machine"] if "machine" in df.columns else []
-    records = [str(v) for v in column if isinstance(v, str) and v.strip()]
+    petsc = sorted({r.peer_info.split(":")[0] for r in runs if r.peer_info.startswith("PETSc")})
+    records = [r.machine for r in runs if r.machine.strip()]
     machines = [{"record": json.loads(text), "runs": records.count(text)} for text in dict.fromkeys(records)]
-    return {"petsc": petsc, "machines": machines, "unrecorded": len(df) - len(records)}
+    return {"petsc": petsc, "machines": machines, "unrecorded": len(runs) - len(records)}
 
 
-def _machine(df: pd.DataFrame) -> dict[str, Any]:
+def _machine(runs: Sequence[Run]) -> dict[str, Any]:
     """Load average at the measurements, wall-clock span of the jobs, their summed time, how many
     ran at once, status counts."""
-    load = df[df["status"] != "skipped"]["load1"].to_numpy(dtype=float)
+    load = _numbers([r for r in runs if r.status != "skipped"], "load1")
     load = load[np.isfinite(load)]
-    jobs = df.drop_duplicates(["N", "config"])
-    started = jobs["job_started"].to_numpy(dtype=float)
-    ends = started + jobs["job_wall_s"].to_numpy(dtype=float)
+    jobs: dict[tuple[int, str], Run] = {}
+    for r in runs:
+        jobs.setdefault((r.N, r.config), r)
+    started = _numbers(list(jobs.values()), "job_started")
+    wall = _numbers(list(jobs.values()), "job_wall_s")
+    ends = started + wall
     return {
         "load": {"min": float(np.min(load)), "median": float(np.median(load)), "max": float(np.max(load))}
         if load.size
         else {},
-        "span_s": float(np.nanmax(ends) - np.nanmin(started)) if len(df) else math.nan,
-        "job_time_s": float(jobs["job_wall_s"].sum()),
+        "span_s": float(np.nanmax(ends) - np.nanmin(started)) if runs else NAN,
+        "job_time_s": float(np.nansum(wall)),
         "concurrent_jobs": concurrent_jobs(started, ends),
-        "counts": df["status"].value_counts().to_dict(),
-        "software": _software(df),
+        "counts": dict(Counter(r.status for r in runs)),
+        "software": _software(runs),
     }
 
 
 def findings(
-    df: pd.DataFrame,
+    runs: Sequence[Run],
     table1_norms: Sequence[str],
     paper_l4: Mapping[int, float] | None = None,
     paper_l4_eoc: Mapping[int, float] | None = None,
     protocol: Protocol | None = None,
 ) -> dict:
-    """The numbers ``work_precision.md`` states, computed from the measurement table.
+    """The numbers ``work_precision.md`` states, computed from the runs of the measurement table.
 
     Every time below is a run's median with its interval, ``{value, lo, hi, interval, samples}``,
     and every ratio ``{value, lo, hi, interval, verdict}`` (``uncertainty``); every time compared
@@ -434,26 +406,26 @@ def findings(
       time, the most of them that ran at once, the status counts, and the machine and software
       the table records.
     """
-    Ns = sorted(int(N) for N in df["N"].unique())
-    t1 = [n for n in table1_norms if f"total_{n}" in df.columns]
-    sel = Selected(df, t1)
-    exact_configs = set(df.loc[df["tol_label"] == EXACT_LABEL, "config"])
-    paper_rates = [paper_l4_eoc.get(N, math.nan) for N in Ns[1:]] if paper_l4_eoc else None
+    Ns = sorted({r.N for r in runs})
+    t1 = [n for n in table1_norms if runs and n in runs[0].total]
+    sel = Selected(runs, t1)
+    exact_configs = {r.config for r in runs if r.kind is Kind.EXACT}
+    paper_rates = [paper_l4_eoc.get(N, NAN) for N in Ns[1:]] if paper_l4_eoc else None
     return {
         "N": Ns,
         "table1_norms": t1,
-        "cells": _cell_changes(df, Ns, t1, sel.tolerance),
+        "cells": _cell_changes(runs, Ns, t1, sel.tolerance),
         "tolerance": sel.tolerance,
         "needed": {c: t for c, t in sel.tolerance.items() if c not in exact_configs},
         "selected": {N: {c: sel.entry(c, N) for c in sel.at(N)} for N in Ns},
         "fastest": _fastest(sel, Ns[-1]),
-        "fair": _fair_race(df, Ns, sel),
-        "scaling": _scaling(df, Ns, sel),
-        "peers": _peers(df),
-        "eoc": _l4_eocs(df, Ns, paper_rates, paper_l4),
+        "fair": _fair_race(runs, Ns, sel),
+        "scaling": _scaling(runs, Ns, sel),
+        "peers": _peers(runs),
+        "eoc": _l4_eocs(runs, Ns, paper_rates, paper_l4),
         "paper_l4_eoc": paper_rates,
         "exact": _exact_cost(Ns, sel),
-        "closest_l4": _closest_l4(df, paper_l4),
-        "protocol": _protocol(df, protocol or Protocol()),
-        **_machine(df),
+        "closest_l4": _closest_l4(runs, paper_l4),
+        "protocol": _protocol(runs, protocol or Protocol()),
+        **_machine(runs),
     }

@@ -7,7 +7,7 @@ What is measured, per mesh ``N`` and per *solver configuration* (``study_configs
   (``timing``): ``wall_s`` the wall time, ``time_ref`` the time in reference units (against
   a sparse reference kernel timed before and after every call), ``cpu_share`` CPU over wall,
   ``spread``, ``time_runs``, ``rejected``, ``loaded``, ``load1`` (1-minute load average);
-  ``machine`` (``machine_record``, JSON): the cores, the CPU model, the virtualisation, the thread
+  ``machine`` (``timing.machine_record``, JSON): the cores, the CPU model, the virtualisation, the thread
   settings and the software versions of the job that measured it.
   For the active-set solver the call is ``solve_discrete`` (a cascade warm start includes
   building and solving the coarse levels); for cvxpy it is ``cvxpy_solve`` (cvxpy's
@@ -43,11 +43,10 @@ import json
 import logging
 import math
 import os
-import platform
 import re
 import tempfile
 import time
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -57,39 +56,23 @@ import numpy as np
 from signorini.fem.norms.p1 import p1_norms
 from signorini.pipeline.artifacts import load_json, save_json
 from signorini.studies.scene.store import SceneMesh, load_system, read_norm
-from signorini.studies.work_precision.study import EXACT_LABEL, GROWTH_EXPONENT, SolverConfig, accuracy_status
-from signorini.studies.work_precision.timing import CallFailed, Protocol, ReferenceKernel, Timer
+from signorini.studies.work_precision.routes import Attempt
+from signorini.studies.work_precision.study import (
+    EXACT_LABEL,
+    GROWTH_EXPONENT,
+    SolverConfig,
+    accuracy_status,
+    table_solver,
+)
+from signorini.timing import CallFailed, Protocol, ReferenceKernel, Timer, machine_record
 
 log = logging.getLogger(__name__)
 
-# cvxpy solver option that limits the wall time of one solve (seconds)
-TIME_LIMIT_OPTIONS = {
-    "CLARABEL": "time_limit",
-    "OSQP": "time_limit",
-    "SCS": "time_limit_secs",
-    "HIGHS": "time_limit",
-    "PIQP": "max_time",
-    "PROXQP": "max_time",  # hypothetical mapping for solvers not installed here
-}
-LOG_FILE_OPTIONS = {"HIGHS": "log_file"}  # solvers whose log can go to a file (failure reasons)
-
-
-@dataclass
-class Attempt:
-    """The outcome of one solver call: result (or None), status, reason, timings and extra
-    record fields (a peer's set-up time, converged reason and provenance)."""
-
-    result: Any
-    status: str
-    reason: str
-    times: list[float]
-    extra: dict = field(default_factory=dict)
-
-
 @contextlib.contextmanager
-def _solver_log(solver: str) -> Iterator[tuple[dict, Path | None]]:
-    """Solver options that send the solver's log to a temporary file (HiGHS), and the file."""
-    option = LOG_FILE_OPTIONS.get(solver)
+def _solver_log(config: SolverConfig) -> Iterator[tuple[dict, Path | None]]:
+    """Solver options that send the solver's log to a temporary file (``Runner.log_option``: HiGHS),
+    and the file."""
+    option = config.runner.log_option(config)
     if option is None:
         yield {}, None
         return
@@ -125,32 +108,6 @@ def classify_failure(err: BaseException, elapsed: float, time_limit_s: float | N
     return "failed", f"{type(err).__name__}: {message[:240]}"
 
 
-def solver_options(config: SolverConfig, tol: float | None, limit: float | None) -> tuple[dict, float]:
-    """The options of an in-process solver call (a QP solver's time limit added) and the KKT
-    residual its answer must reach (``tol``, the solver's default tolerance, the certificate's 1e-10)."""
-    from signorini.solvers.cvxpy_qp import TOLERANCE_OPTIONS
-
-    options = dict(config.options)
-    if config.exact:
-        return options, float(options.get("kkt_tol", 1e-10))
-    if limit is not None and config.solver in TIME_LIMIT_OPTIONS:
-        options.setdefault(TIME_LIMIT_OPTIONS[config.solver], float(limit))
-    default = TOLERANCE_OPTIONS.get(config.solver, ((), math.nan))[1]
-    return options, float(tol) if tol is not None else float(default)
-
-
-def _in_process_call(config: SolverConfig, disc, tol: float | None, options: Mapping):
-    """The call of an active-set or cvxpy configuration, for ``timing.Timer``: ``(SolveResult, None)``."""
-    from signorini.fem.solve import solve_discrete
-    from signorini.solvers import cvxpy_solve
-
-    options = dict(options)
-    if config.exact:
-        warm = options.pop("warm_start", "cascade")
-        return lambda: (solve_discrete(disc, config.solver, warm_start=warm, **options), None)
-    return lambda: (cvxpy_solve(disc.A, disc.b, disc.boundary, config.solver, tol=tol, check=False, **options), None)
-
-
 def timed_call(
     config: SolverConfig,
     disc,
@@ -158,7 +115,7 @@ def timed_call(
     time_limit_s: float | None = None,
     peer=None,
     initial_guess: np.ndarray | None = None,
-):
+) -> Callable[[], tuple]:
     """The call ``run_solver`` times, for a round-robin of several configurations
     (``timing.round_robin``; ``benchmarks/``): in process ``(SolveResult, None)``; a peer
     ``((answer, u), (solve wall s, solve CPU s))`` (``peers.driver_call``, ``peers.outcome``)."""
@@ -167,7 +124,7 @@ def timed_call(
 
         return driver_call(config, peer, tol, time_limit_s, initial_guess)
     limit = None if config.exact else time_limit_s
-    return _in_process_call(config, disc, tol, solver_options(config, tol, limit)[0])
+    return config.runner.call(config, disc, tol, config.runner.settings(config, tol, limit)[0])
 
 
 def run_solver(
@@ -194,13 +151,11 @@ def run_solver(
     if config.peer:
         from signorini.studies.work_precision.peers import run_peer
 
-        out = run_peer(config, peer, disc, tol, time_limit_s, timer, kernel, initial_guess)
-        return Attempt(out.result, out.status, out.reason, out.times, out.extra)
+        return run_peer(config, peer, disc, tol, time_limit_s, timer, kernel, initial_guess)
     limit = None if config.exact else time_limit_s
-    options, required = solver_options(config, tol, limit)
-    with _solver_log(config.solver) as (log_options, log_path):
-        options.update(log_options)
-        call = _in_process_call(config, disc, tol, options)
+    options, required = config.runner.settings(config, tol, limit)
+    with _solver_log(config) as (log_options, log_path):
+        call = config.runner.call(config, disc, tol, options | log_options)
         try:
             measured = timer.measure(call, kernel)
         except CallFailed as err:  # a failing solver is recorded, never raised
@@ -215,19 +170,6 @@ def run_solver(
     times = [x.cpu_s for x in measured.samples]
     status, reason = accuracy_status(result.certificate.worst, required)
     return Attempt(result, status, reason, times, extra | {"kkt_required": required})
-
-
-def warm_up(config: SolverConfig) -> None:
-    """Load the solver's libraries with a 3-unknown QP, so the first timed call pays no import."""
-    if config.exact or config.peer:  # a peer starts a fresh process per run anyway
-        return
-    import scipy.sparse as sp
-
-    from signorini.solvers import cvxpy_solve
-
-    with contextlib.suppress(Exception):
-        A = sp.identity(3, format="csr") * 2.0
-        cvxpy_solve(A, np.array([1.0, -1.0, 1.0]), np.array([0, 1]), config.solver, check=False, **config.options)
 
 
 def tolerance_label(tol: float | None, config: SolverConfig) -> str:
@@ -268,52 +210,6 @@ def skip_reason(
     return None
 
 
-SOFTWARE = ("numpy", "scipy", "cvxpy")  # the distributions whose versions a record names, with Python's
-
-
-def _read(path: Path) -> str:
-    try:
-        return path.read_text(encoding="utf-8", errors="replace")
-    except OSError:
-        return ""
-
-
-def machine_record(
-    environ: Mapping[str, str] | None = None,
-    cpuinfo: Path = Path("/proc/cpuinfo"),
-    product: Path = Path("/sys/class/dmi/id/product_name"),
-) -> dict[str, Any]:
-    """What a measurement ran on: ``cores`` (``os.cpu_count``), ``usable_cores`` (the affinity
-    mask), ``cpu_model`` (``model name`` of ``cpuinfo``; "" unknown), ``hypervisor`` (the CPU's
-    ``hypervisor`` flag: the machine is virtualised; None without ``cpuinfo``), ``product`` (the
-    firmware's product name, e.g. a hypervisor's; "" unknown), ``threads`` (each of
-    ``jobenv.THREAD_VARIABLES`` in ``environ``, default this process's; "" unset) and ``software``
-    (Python's version and those of ``SOFTWARE``)."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    from signorini.pipeline.jobenv import THREAD_VARIABLES
-    from signorini.studies.work_precision.timing import usable_cores
-
-    environ = os.environ if environ is None else environ
-    text = _read(cpuinfo)
-    fields = [line.split(":", 1) for line in text.splitlines() if ":" in line]
-    model = next((v.strip() for k, v in fields if k.strip() == "model name"), "")
-    flags = next((v.split() for k, v in fields if k.strip() == "flags"), None)
-    software = {"Python": platform.python_version()}
-    for name in SOFTWARE:
-        with contextlib.suppress(PackageNotFoundError):
-            software[name] = version(name)
-    return {
-        "cores": os.cpu_count(),
-        "usable_cores": usable_cores(),
-        "cpu_model": model,
-        "hypervisor": None if flags is None else "hypervisor" in flags,
-        "product": _read(product).strip(),
-        "threads": {name: environ.get(name, "") for name in THREAD_VARIABLES},
-        "software": software,
-    }
-
-
 def _fingerprint(u: np.ndarray) -> str:
     return hashlib.sha256(np.ascontiguousarray(u).tobytes()).hexdigest()
 
@@ -351,18 +247,38 @@ def _load_inputs(at: SceneMesh, inputs: Mapping[str, Any], conventions: Mapping 
     return _Inputs(disc, exact, disc_err, build_s, prev, Conventions(**dict(conventions or {})))
 
 
+def timed_start(disc: Any, timer: Timer, kernel: ReferenceKernel) -> tuple[np.ndarray | None, dict]:
+    """The start of a configuration started from the cascade: the cascade's interpolated coarse
+    solution of ``disc`` (``fem.solve.cascade_start``; None below its first coarse level), timed
+    under the protocol, and the summary of its timing (empty without it)."""
+    from signorini.fem.solve import cascade_start
+
+    measured = timer.measure(lambda: (cascade_start(disc), None), kernel, accept=lambda u: True)
+    if measured.result is None:
+        return None, {}
+    return measured.result, measured.summary(timer.protocol, timer.machine.cores)
+
+
+def with_start(timing: Mapping, start: Mapping) -> dict:
+    """A run's timing fields with the cost of its start (``timed_start``) added to ``time_s``,
+    ``time_ref`` and ``wall_s`` and recorded (``start_s``, ``start_ref``): the start is part of the
+    route, as the cascade's coarse levels are part of ours.  Unchanged without a start or a time."""
+    if not start or "time_s" not in timing:
+        return dict(timing)
+    added = {key: timing[key] + start[key] for key in ("time_s", "time_ref", "wall_s")}
+    return {**timing, "start_s": start["time_s"], "start_ref": start["time_ref"], **added}
+
+
 def _cascade_start(inp: _Inputs, config: SolverConfig) -> str | None:
-    """For a peer started from the cascade: compute and time the start (``inp.start``,
-    ``inp.start_timing``); the reason to skip when the cascade has no coarse level at this N."""
+    """For a peer started from the cascade: its start (``inp.start``, ``inp.start_timing``); the
+    reason to skip when the cascade has no coarse level at this N."""
     if not (config.peer and config.initial == "cascade"):
         return None
-    from signorini.fem.solve import CASCADE_FACTOR, CASCADE_MIN_N, cascade_start
+    from signorini.fem.solve import CASCADE_FACTOR, CASCADE_MIN_N
 
-    measured = inp.timer.measure(lambda: (cascade_start(inp.disc), None), inp.kernel, accept=lambda u: True)
-    if measured.result is None:
+    inp.start, inp.start_timing = timed_start(inp.disc, inp.timer, inp.kernel)
+    if inp.start is None:
         return f"no cascade start below N = {CASCADE_FACTOR * CASCADE_MIN_N} (the cascade solves cold there)"
-    inp.start = measured.result
-    inp.start_timing = measured.summary(inp.timer.protocol, inp.timer.machine.cores)
     return None
 
 
@@ -375,7 +291,7 @@ def _base_record(inp: _Inputs, config: SolverConfig, tol: float | None) -> dict[
         "h": mesh_width(N),
         "n_dofs": int(inp.disc.b.size),
         "config": config.name,
-        "solver": config.solver,
+        "solver": table_solver(config.solver),
         "label": config.label,
         "tol": math.nan if tol is None else float(tol),
         "tol_label": tolerance_label(tol, config),
@@ -397,7 +313,7 @@ def _measure(inp: _Inputs, config: SolverConfig, tol: float | None, time_limit: 
     attempt = run_solver(config, inp.disc, tol, time_limit, inp.timer, inp.kernel, inp.peer, inp.start)
     times = attempt.times or [math.nan]
     extra = dict(attempt.extra)
-    timing = extra.pop("timing", {})
+    timing = with_start(extra.pop("timing", {}), inp.start_timing)
     record = {
         "status": attempt.status,
         "reason": attempt.reason,
@@ -407,14 +323,6 @@ def _measure(inp: _Inputs, config: SolverConfig, tol: float | None, time_limit: 
         **{k: v for k, v in timing.items() if v is not None},
         **extra,
     }
-    if inp.start_timing and "time_s" in timing:  # the start's cost is part of the route, as in the cascade
-        record.update(
-            start_s=inp.start_timing["time_s"],
-            start_ref=inp.start_timing["time_ref"],
-            time_s=timing["time_s"] + inp.start_timing["time_s"],
-            time_ref=timing["time_ref"] + inp.start_timing["time_ref"],
-            wall_s=timing["wall_s"] + inp.start_timing["wall_s"],
-        )
     res = attempt.result
     if res is not None:
         record.update(
@@ -508,7 +416,7 @@ def measure_stage(
     inp.timer = Timer(Protocol.from_mapping(timing))
     inp.kernel = ReferenceKernel(inp.disc.A)
     inp.machine = json.dumps(machine_record(), sort_keys=True)
-    warm_up(config)
+    config.runner.warm_up(config)  # a peer starts a fresh process per run anyway
     no_start = _cascade_start(inp, config)
     norm_cache: dict[str, dict[str, float]] = {_fingerprint(inp.exact): inp.disc_err}
     records = []

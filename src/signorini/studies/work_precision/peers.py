@@ -21,10 +21,10 @@ import tempfile
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
+from signorini.studies.work_precision.routes import Attempt
 from signorini.studies.work_precision.study import PEER_PYTHON, PEER_SOLVERS, SolverConfig, accuracy_status
 
 DEFAULT_TOL = 1e-8  # PETSc's default snes_rtol and tao_gatol/grtol: what a default run must reach
@@ -97,17 +97,6 @@ def _last_line(text: str) -> str:
     return (lines[-1] if lines else "no output")[:300]
 
 
-@dataclass
-class PeerOutcome:
-    """What one driver run gave: result (or None), status, reason, solve times, extra record fields."""
-
-    result: Any
-    status: str
-    reason: str
-    times: list[float]
-    extra: dict[str, Any] = field(default_factory=dict)
-
-
 def driver_call(
     config: SolverConfig,
     route: PeerRoute,
@@ -166,31 +155,31 @@ def run_peer(
     timer,
     kernel,
     initial_guess: np.ndarray | None = None,
-) -> PeerOutcome:
+) -> Attempt:
     """Run ``config`` (a peer) at tolerance ``tol`` (None: PETSc's defaults) on ``route.system``
     under the timing protocol (``timer``, a ``timing.Timer``, with the reference ``kernel``),
     from u = 0 or from ``initial_guess``; certify its answer against ``disc`` (``A``, ``b``,
     ``boundary``).  Never raises."""
-    from signorini.studies.work_precision.timing import CallFailed
+    from signorini.timing import CallFailed
 
     if not route.available:
-        return PeerOutcome(None, "skipped", route.reason, [])
+        return Attempt(None, "skipped", route.reason, [])
     call = driver_call(config, route, tol, time_limit_s, initial_guess)
     try:
         measured = timer.measure(call, kernel, accept=converged)
     except CallFailed as err:  # OSError starting the interpreter, a corrupt answer file, ...
-        return PeerOutcome(None, "failed", f"{type(err.error).__name__}: {err.error}"[:300], [err.elapsed])
+        return Attempt(None, "failed", f"{type(err.error).__name__}: {err.error}"[:300], [err.elapsed])
     answer, u = measured.result
     timing = measured.summary(timer.protocol, timer.machine.cores)
     if answer.get("status") in ("timeout", "error"):  # no solve to time: the wall time until the end
         times = [measured.samples[-1].wall_s] if answer["status"] == "timeout" else []
-        return PeerOutcome(None, "failed", str(answer["reason"]), times, {"timing": {"load1": timing.get("load1")}})
+        return Attempt(None, "failed", str(answer["reason"]), times, {"timing": {"load1": timing.get("load1")}})
     out = outcome(config, disc, tol, answer, u)
     out.extra["timing"] = timing
     return out
 
 
-def outcome(config: SolverConfig, disc, tol: float | None, answer: dict, u) -> PeerOutcome:
+def outcome(config: SolverConfig, disc, tol: float | None, answer: dict, u) -> Attempt:
     """Status, certificate and record fields of a driver's answer."""
     extra = {
         "setup_s": float(answer["setup_s"]) if "setup_s" in answer else float("nan"),
@@ -199,17 +188,17 @@ def outcome(config: SolverConfig, disc, tol: float | None, answer: dict, u) -> P
         "peer": {k: answer.get(k) for k in PEER_FIELDS},
     }
     if answer.get("status") == "unavailable":
-        return PeerOutcome(None, "skipped", str(answer["reason"]), [], extra)
+        return Attempt(None, "skipped", str(answer["reason"]), [], extra)
     if answer.get("status") != "done":
-        return PeerOutcome(None, "failed", str(answer.get("reason", answer.get("status"))), [], extra)
+        return Attempt(None, "failed", str(answer.get("reason", answer.get("status"))), [], extra)
     required = DEFAULT_TOL if tol is None else float(tol)
     result = peer_result(config.name, disc.A, disc.b, disc.boundary, u, required, answer)
     times = [float(t) for t in answer.get("solve_cpu_times", answer["solve_times"])]
     extra["kkt_required"] = required
     if not answer["converged"]:
-        return PeerOutcome(result, "failed", f"PETSc {answer['converged_reason']}", times, extra)
+        return Attempt(result, "failed", f"PETSc {answer['converged_reason']}", times, extra)
     status, reason = accuracy_status(result.certificate.worst, required)
-    return PeerOutcome(result, status, reason, times, extra)
+    return Attempt(result, status, reason, times, extra)
 
 
 def peer_info(answer: Mapping) -> str:

@@ -16,7 +16,7 @@ The tolerance is fixed per configuration across the meshes, not chosen per mesh 
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -25,7 +25,7 @@ from signorini.formatting import sci_md
 from signorini.studies.work_precision.study import EXACT_LABEL
 
 if TYPE_CHECKING:
-    import pandas as pd
+    from signorini.studies.work_precision.table import Run
 
 DEFAULT_LABEL = "default"  # the tolerance label of a solver's own default tolerance
 
@@ -35,17 +35,17 @@ def printed(x: float) -> str:
     return sci_md(x) if np.isfinite(x) else "—"
 
 
-def digits_unchanged(row: Mapping, norms: Sequence[str]) -> bool | None:
+def digits_unchanged(run: Run, norms: Sequence[str]) -> bool | None:
     """Whether the run's total errors print like the exact ones in every Table 1 column
     (None: the run has no answer)."""
-    if not norms or not np.isfinite(float(row[f"total_{norms[0]}"])):
+    if not norms or not np.isfinite(run.total[norms[0]]):
         return None
-    return all(printed(float(row[f"total_{n}"])) == printed(float(row[f"disc_{n}"])) for n in norms)
+    return all(printed(run.total[n]) == printed(run.disc[n]) for n in norms)
 
 
-def keeps_digits(row: Mapping, norms: Sequence[str]) -> bool:
+def keeps_digits(run: Run, norms: Sequence[str]) -> bool:
     """Status ``ok`` and Table 1's digits unchanged."""
-    return str(row["status"]) == "ok" and digits_unchanged(row, norms) is True
+    return run.status == "ok" and digits_unchanged(run, norms) is True
 
 
 def swept(labels: Sequence[str]) -> list[str]:
@@ -56,25 +56,19 @@ def swept(labels: Sequence[str]) -> list[str]:
     return exact + sorted(rest, key=float, reverse=True)
 
 
-def selected_tolerances(df: pd.DataFrame, norms: Sequence[str]) -> dict[str, str | None]:
+def selected_tolerances(runs: Sequence[Run], norms: Sequence[str]) -> dict[str, str | None]:
     """Per configuration (in table order), its selected tolerance (None: none)."""
-    meshes = {int(N) for N in df["N"].unique()}
-    keeps = np.array([keeps_digits(r, norms) for _, r in df.iterrows()], dtype=bool)
+    meshes = {run.N for run in runs}
     chosen: dict[str, str | None] = {}
-    for config in dict.fromkeys(df["config"]):
-        mine = df["config"] == config
-        chosen[config] = next(
-            (
-                label
-                for label in swept(list(df.loc[mine, "tol_label"]))
-                if {int(N) for N in df.loc[mine & (df["tol_label"] == label) & keeps, "N"]} == meshes
-            ),
-            None,
-        )
+    for config in dict.fromkeys(run.config for run in runs):
+        mine = [run for run in runs if run.config == config]
+        keeping = {(run.tol_label, run.N) for run in mine if keeps_digits(run, norms)}
+        labels = swept([run.tol_label for run in mine])
+        chosen[config] = next((lab for lab in labels if {N for t, N in keeping if t == lab} == meshes), None)
     return chosen
 
 
-def selected_runs(df: pd.DataFrame, norms: Sequence[str]) -> pd.DataFrame:
+def selected_runs(runs: Sequence[Run], norms: Sequence[str]) -> list[Run]:
     """The selected runs of every configuration that has a selected tolerance (table order kept)."""
-    chosen = selected_tolerances(df, norms)
-    return df[[chosen.get(c) == lab for c, lab in zip(df["config"], df["tol_label"], strict=True)]]
+    chosen = selected_tolerances(runs, norms)
+    return [run for run in runs if chosen.get(run.config) == run.tol_label]

@@ -1,5 +1,6 @@
-"""The work-precision study's configuration: the solver configurations of a scene's ``study``
-block and the checks that the scene may reuse its source scene's artifacts."""
+"""The work-precision study's configuration: the solver routes a configuration can take
+(``ROUTES``, ``kind_of``), the solver configurations of a scene's ``study`` block and the checks
+that the scene may reuse its source scene's artifacts."""
 
 from __future__ import annotations
 
@@ -7,9 +8,13 @@ import math
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from signorini.fem.mesh import DEFAULT_DIAGONAL
 from signorini.published import FIGURE3_NORMS
+from signorini.solvers import EXACT_SOLVERS
+from signorini.studies.work_precision import routes
+from signorini.studies.work_precision.routes import QP_PREFIX, Kind, Runner
 
 FIGURE_NORMS = FIGURE3_NORMS  # the panel rows of work_precision.{pdf,png}
 EXACT_LABEL = "exact"  # the tolerance label of the exact (active-set) runs
@@ -20,6 +25,16 @@ PEER_SOLVERS = {"petsc_snes": "snes", "petsc_tao": "tao"}
 PEER_PYTHON = "/usr/bin/python3"  # Debian's python3-petsc4py-real is built for it
 CASCADE_START = "cascade"
 WARM_SUFFIX = "_ws"  # name of a peer's variant started from the cascade (``same_warm_start``)
+# the prose of work_precision.md (report.prose): a file of the package that no import names, so the
+# report's rule lists it with its code inputs itself (workflow/rules/work_precision.smk)
+REPORT_TEMPLATE = Path(__file__).with_name("report.tmpl")
+# the routes of the study's configurations, name → its runner (a name ending in "_" is a prefix:
+# cvxpy_<solver>); spelled as the scenes and the stability atlas spell them
+ROUTES: dict[str, Runner] = {
+    **dict.fromkeys(EXACT_SOLVERS, routes.EXACT),
+    QP_PREFIX: routes.CVXPY,
+    **dict.fromkeys(PEER_SOLVERS, routes.PEER),
+}
 
 
 INACCURATE = "KKT residual above the tolerance"  # the reason of an answer the certificate does not accept
@@ -36,13 +51,47 @@ class StudyConfigError(ValueError):
     """The ``study`` block of a scene is inconsistent with its source scene."""
 
 
+class UnknownSolverError(StudyConfigError):
+    """A solver name that is none of the study's routes (``ROUTES``)."""
+
+
+def route(solver: str) -> Runner:
+    """The runner of a route: a name of ``ROUTES``, or a prefix of it followed by a solver's name
+    (``cvxpy_osqp``); any other name raises ``UnknownSolverError``."""
+    if solver in ROUTES and not solver.endswith("_"):
+        return ROUTES[solver]
+    for prefix, runner in ROUTES.items():
+        if prefix.endswith("_") and solver.startswith(prefix) and len(solver) > len(prefix):
+            return runner
+    known = ", ".join(f"{r}<solver> (e.g. {r}osqp)" if r == QP_PREFIX else r + "<solver>" if r.endswith("_") else r
+                      for r in ROUTES)
+    raise UnknownSolverError(f"unknown solver {solver!r}; choose one of the routes {known}")
+
+
+def kind_of(solver: str) -> Kind:
+    """The kind of a route (``routes.Kind``): exact, QP or peer; an unknown name raises
+    ``UnknownSolverError``."""
+    return route(solver).kind
+
+
+def table_solver(solver: str) -> str:
+    """How ``work_precision.csv`` names a route's solver: a cvxpy route by cvxpy's name of its QP
+    solver (``cvxpy_osqp`` → ``OSQP``), any other route by itself."""
+    return route(solver).table_name(solver)
+
+
+def table_route(name: str) -> str:
+    """The route of a solver named as ``table_solver`` names it (``OSQP`` → ``cvxpy_osqp``)."""
+    return name if name in ROUTES else QP_PREFIX + name.lower()
+
+
 @dataclass(frozen=True)
 class SolverConfig:
-    """One solver configuration: ``solver`` is an exact route (``active_set``, ``multigrid``,
-    ``auto``), a cvxpy QP solver (upper case) or a
-    PETSc peer (``petsc_snes``, ``petsc_tao``); ``options`` go to ``solve_discrete`` (active set:
-    ``warm_start``, ``backend``, …), ``cvxpy_solve`` (solver options such as ``polishing``) or
-    into PETSc's options database (``snes_type``, ``pc_type``, …, without the dash)."""
+    """One solver configuration: ``solver`` is a route of ``ROUTES``: an exact route (``active_set``,
+    ``multigrid``, ``auto``), a cvxpy QP solver (``cvxpy_osqp``, …), a PETSc peer (``petsc_snes``,
+    ``petsc_tao``) or another in-process route; ``options`` go to its call (``solve_discrete``:
+    ``warm_start``, ``backend``, …; ``cvxpy_solve``: solver options such as ``polishing``) or into
+    PETSc's options database (``snes_type``, ``pc_type``, …, without the dash)."""
 
     name: str
     solver: str
@@ -51,11 +100,19 @@ class SolverConfig:
     start: str = "cold"  # a peer's initial guess: "cold" (u = 0) or "cascade" (CASCADE_START)
 
     @property
+    def runner(self) -> Runner:
+        """What runs the configuration's route (``route``)."""
+        return route(self.solver)
+
+    @property
+    def kind(self) -> Kind:
+        """Exact, QP or peer (``kind_of``)."""
+        return self.runner.kind
+
+    @property
     def exact(self) -> bool:
         """A certified active-set route (direct, multigrid or auto)."""
-        from signorini.pipeline.solver_options import exact_routes
-
-        return self.solver in exact_routes()
+        return self.kind is Kind.EXACT
 
     @property
     def initial(self) -> str:
@@ -67,7 +124,7 @@ class SolverConfig:
     @property
     def peer(self) -> bool:
         """A PETSc method, run by the external driver (``peers``)."""
-        return self.solver in PEER_SOLVERS
+        return self.kind is Kind.PEER
 
     def as_dict(self) -> dict:
         out = {"name": self.name, "solver": self.solver, "label": self.label, "options": dict(self.options)}
@@ -75,27 +132,27 @@ class SolverConfig:
 
 
 def study_configs(study: Mapping, installed: Sequence[str] = ()) -> dict[str, SolverConfig]:
-    """The configurations of a ``study`` block: its ``configs`` (name → ``{solver, label, options}``)
-    plus, with ``qp_solvers: installed`` (the QP solvers ``installed``, e.g.
-    ``signorini.solvers.installed_qp_solvers()``) or a list of names, one configuration per cvxpy
-    QP solver, named by the lower-case solver name, unless a configuration of that name exists.
-    With ``same_warm_start: true`` every PETSc peer also gets a variant ``<name>_ws`` that starts
-    from the cascade's interpolated coarse solution (cvxpy's QP interfaces take no initial guess:
-    their ``warm_start`` reuses the previous solve of the same problem only)."""
-    from signorini.pipeline.solver_options import check_options, exact_routes
+    """The configurations of a ``study`` block: its ``configs`` (name → ``{solver, label, options}``,
+    ``solver`` a route of ``ROUTES``) plus, with ``qp_solvers: installed`` (the cvxpy QP solvers
+    ``installed``, by cvxpy's names, e.g. ``signorini.solvers.installed_qp_solvers()``) or a list of
+    QP routes (``cvxpy_osqp``, …), one configuration per QP solver, named and labelled as the table
+    names the solver (``osqp``, ``OSQP``), unless a configuration of that name exists.  With
+    ``same_warm_start: true`` every PETSc peer also gets a variant ``<name>_ws`` that starts from the
+    cascade's interpolated coarse solution (cvxpy's QP interfaces take no initial guess: their
+    ``warm_start`` reuses the previous solve of the same problem only).  An unknown solver raises
+    ``UnknownSolverError``."""
+    from signorini.pipeline.solver_options import check_options
 
     out: dict[str, SolverConfig] = {}
     for name, spec in (study.get("configs") or {}).items():
-        solver = str(spec["solver"])
-        solver = solver if solver in exact_routes() or solver in PEER_SOLVERS else solver.upper()
-        out[name] = SolverConfig(name, solver, str(spec.get("label", name)), dict(spec.get("options") or {}))
+        options = dict(spec.get("options") or {})
+        out[name] = SolverConfig(name, str(spec["solver"]), str(spec.get("label", name)), options)
     qp = study.get("qp_solvers", [])
-    if qp == "installed":
-        qp = list(installed)
-    for solver in qp:
-        name = solver.lower()
-        if name not in out:
-            out[name] = SolverConfig(name, solver.upper(), solver.upper(), {})
+    for solver in [QP_PREFIX + s.lower() for s in installed] if qp == "installed" else qp:
+        if kind_of(solver) is not Kind.QP:
+            raise StudyConfigError(f"study.qp_solvers: {solver!r} is not a QP solver (e.g. {QP_PREFIX}osqp)")
+        label = table_solver(solver)
+        out.setdefault(label.lower(), SolverConfig(label.lower(), solver, label, {}))
     if study.get("same_warm_start"):
         for name, config in list(out.items()):
             if config.peer and config.start == "cold" and name + WARM_SUFFIX not in out:
@@ -104,6 +161,10 @@ def study_configs(study: Mapping, installed: Sequence[str] = ()) -> dict[str, So
     for name, config in out.items():
         if not re.fullmatch(r"[a-z0-9_]+", name):
             raise StudyConfigError(f"configuration name {name!r}: use lower-case letters, digits and _")
+        try:
+            route(config.solver)
+        except UnknownSolverError as err:
+            raise UnknownSolverError(f"study.configs.{name}.solver: {err}") from None
         problem = check_options(f"study.configs.{name}.options", config.solver, config.options)
         if problem:
             raise StudyConfigError(problem)

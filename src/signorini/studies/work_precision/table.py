@@ -1,108 +1,152 @@
 """Stage ``work_precision_table``: every measurement record in one table,
-``paper_figures/work_precision.csv``, and how the other renderers read and order it."""
+``paper_figures/work_precision.csv``, one ``Run`` per row; how the other renderers read and order it."""
 
 from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field, fields
 
 from signorini.pipeline.artifacts import CorruptArtifactError, atomic_write_csv, load_json
-from signorini.studies.work_precision.study import EXACT_LABEL
+from signorini.studies.work_precision.routes import Kind
+from signorini.studies.work_precision.study import EXACT_LABEL, kind_of, table_route
 
-if TYPE_CHECKING:
+NAN = math.nan
+ERRORS = ("alg", "total", "disc")  # the errors by norm: columns alg_<norm>, total_<norm>, disc_<norm>
+
+
+@dataclass(frozen=True)
+class Run:
+    """One row of ``work_precision.csv``: one configuration at one tolerance on one mesh, as
+    ``measure`` records it (its module docstring says what the fields mean).  A field the run did
+    not record is NaN (a number), None (a count or a flag) or "" (a text); ``alg``, ``total`` and
+    ``disc`` are the algebraic, total and discretisation errors by norm."""
+
+    N: int
+    h: float
+    n_dofs: int
+    config: str
+    solver: str
+    label: str
+    tol: float = NAN
+    tol_label: str = ""
+    is_default: bool | None = None
+    status: str = ""
+    reason: str = ""
+    start: str = ""
+    time_s: float = NAN
+    wall_s: float = NAN
+    time_ref: float = NAN
+    ref_s: float = NAN
+    cpu_share: float = NAN
+    spread: float = NAN
+    time_runs: int | None = None
+    calls: int | None = None
+    rejected: int | None = None
+    loaded: bool | None = None
+    time_stop: str = ""
+    times: str = ""
+    start_s: float = NAN
+    solver_time_s: float = NAN
+    setup_s: float = NAN
+    converged_reason: str = ""
+    peer_info: str = ""
+    iterations: int | None = None
+    n_active: int | None = None
+    kkt_stationarity: float = NAN
+    kkt_primal: float = NAN
+    kkt_dual: float = NAN
+    kkt_complementarity: float = NAN
+    kkt_worst: float = NAN
+    kkt_required: float = NAN
+    build_s: float = NAN
+    job_wall_s: float = NAN
+    job_started: float = NAN
+    load1: float = NAN
+    load1_max: float = NAN
+    machine: str = ""
+    alg: dict[str, float] = field(default_factory=dict)
+    total: dict[str, float] = field(default_factory=dict)
+    disc: dict[str, float] = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, record: Mapping) -> Run:
+        """A run from a measurement record or a row of the table (other keys left out)."""
+        values = {name: _value(kind, record[name]) for name, kind in _KINDS.items() if name in record}
+        norms = [key.removeprefix("disc_") for key in record if key.startswith("disc_")]
+        errors = {kind: {n: float(record.get(f"{kind}_{n}", NAN)) for n in norms} for kind in ERRORS}
+        return cls(**values, **errors)
+
+    def row(self) -> dict:
+        """The run as a row of the table: ``ID_COLUMNS``, then its errors by norm."""
+        row = {name: getattr(self, name) for name in _KINDS}
+        return row | {f"{kind}_{n}": v for kind in ERRORS for n, v in getattr(self, kind).items()}
+
+    @property
+    def kind(self) -> Kind:
+        """Exact, QP or peer (``study.kind_of`` of the route the table's solver name stands for)."""
+        return kind_of(table_route(self.solver))
+
+
+_KINDS = {f.name: f.type for f in fields(Run) if f.name not in ERRORS}  # name → annotation
+ID_COLUMNS = list(_KINDS)
+
+
+def _value(kind: str, value: object) -> object:
+    """A field's value as its annotation says (a missing one: NaN, "" or None)."""
+    missing = value is None or (isinstance(value, float) and math.isnan(value))
+    if kind == "float":
+        return NAN if missing else float(value)
+    if kind == "str":
+        return "" if missing else str(value)
+    if missing:
+        return None
+    if kind.startswith("bool"):
+        return value == "True" if isinstance(value, str) else bool(value)
+    return int(value)
+
+
+def table_stage(jsons: Sequence[str | os.PathLike], out_csv: str | os.PathLike) -> list[Run]:
+    """``work_precision.csv``: every record of the measurement artifacts, one row each, sorted by
+    mesh and configuration (``write_runs``)."""
+    runs = [Run.of(record) for path in jsons for record in load_json(path)["records"]]
+    runs.sort(key=lambda run: (run.N, run.config))
+    write_runs(runs, out_csv)
+    return runs
+
+
+def write_runs(runs: Sequence[Run], out_csv: str | os.PathLike) -> None:
+    """The runs as ``work_precision.csv``: columns ``ID_COLUMNS``, then ``alg_<norm>``,
+    ``total_<norm>``, ``disc_<norm>`` in the order the runs name the norms; a missing value empty."""
     import pandas as pd
 
-ID_COLUMNS = [
-    "N",
-    "h",
-    "n_dofs",
-    "config",
-    "solver",
-    "label",
-    "tol",
-    "tol_label",
-    "is_default",
-    "status",
-    "reason",
-    "start",
-    "time_s",
-    "wall_s",
-    "time_ref",
-    "ref_s",
-    "cpu_share",
-    "spread",
-    "time_runs",
-    "calls",
-    "rejected",
-    "loaded",
-    "time_stop",
-    "times",
-    "start_s",
-    "solver_time_s",
-    "setup_s",
-    "converged_reason",
-    "peer_info",
-    "iterations",
-    "n_active",
-    "kkt_stationarity",
-    "kkt_primal",
-    "kkt_dual",
-    "kkt_complementarity",
-    "kkt_worst",
-    "kkt_required",
-    "build_s",
-    "job_wall_s",
-    "job_started",
-    "load1",
-    "load1_max",
-    "machine",
-]
+    norms = list(dict.fromkeys(n for run in runs for n in run.disc))
+    columns = ID_COLUMNS + [f"{kind}_{n}" for kind in ERRORS for n in norms]
+    atomic_write_csv(pd.DataFrame([run.row() for run in runs], columns=columns), out_csv)
 
 
-def table_stage(jsons: Sequence[str | os.PathLike], out_csv: str | os.PathLike) -> pd.DataFrame:
-    """``work_precision.csv``: every record of the measurement artifacts, one row each, columns
-    ``ID_COLUMNS`` then ``alg_<norm>``, ``total_<norm>``, ``disc_<norm>`` (norm order kept)."""
-    import pandas as pd
-
-    rows = []
-    for path in jsons:
-        rows.extend(load_json(path)["records"])
-    df = pd.DataFrame(rows)
-    norms = [c.removeprefix("disc_") for c in df.columns if c.startswith("disc_")]
-    columns = ID_COLUMNS + [f"{kind}_{n}" for kind in ("alg", "total", "disc") for n in norms]
-    for c in columns:
-        if c not in df.columns:
-            df[c] = math.nan
-    df = df[columns].sort_values(["N", "config"], kind="stable").reset_index(drop=True)
-    atomic_write_csv(df, out_csv)
-    return df
-
-
-def read_measurements(path: str | os.PathLike) -> pd.DataFrame:
-    """``work_precision.csv`` as a DataFrame (``reason``/``times``/``machine`` as strings; a table
-    measured before the ``machine`` column gets it empty)."""
+def read_runs(path: str | os.PathLike) -> list[Run]:
+    """The runs of ``work_precision.csv`` (a table measured before the ``machine`` column: each
+    with an empty one)."""
     import pandas as pd
 
     try:
-        text = ("reason", "times", "tol_label", "converged_reason", "peer_info", "start", "machine")
-        dtype = dict.fromkeys(text, str)
-        df = pd.read_csv(path, dtype=dtype, keep_default_na=True, encoding="utf-8")
+        dtype = {name: str for name, kind in _KINDS.items() if kind == "str"}
+        frame = pd.read_csv(path, dtype=dtype, keep_default_na=True, encoding="utf-8")
     except (OSError, ValueError) as err:
         raise CorruptArtifactError(f"{path}: unreadable CSV ({err})") from err
-    for name in ("reason", "converged_reason", "peer_info", "machine"):
-        df[name] = df[name].fillna("") if name in df.columns else ""
-    return df
+    return [Run.of(row) for row in frame.to_dict("records")]
 
 
-def tolerance_order(df: pd.DataFrame) -> list[tuple[str, str]]:
+def tolerance_order(runs: Sequence[Run]) -> list[tuple[str, str]]:
     """(config, tol_label) pairs in plotting order: configs as they appear, the exact solver's
     single run, then each QP solver's default followed by its tolerances loose to tight."""
+    labels: dict[str, dict[str, None]] = {}
+    for run in runs:
+        labels.setdefault(run.config, {})[run.tol_label] = None
     out = []
-    for config in dict.fromkeys(df["config"]):
-        sub = df[df["config"] == config]
-        labels = list(dict.fromkeys(sub["tol_label"]))
-        rest = sorted((lab for lab in labels if lab not in ("default", EXACT_LABEL)), key=float, reverse=True)
-        out += [(config, lab) for lab in labels if lab in ("default", EXACT_LABEL)] + [(config, lab) for lab in rest]
+    for config, mine in labels.items():
+        rest = sorted((lab for lab in mine if lab not in ("default", EXACT_LABEL)), key=float, reverse=True)
+        out += [(config, lab) for lab in mine if lab in ("default", EXACT_LABEL)] + [(config, lab) for lab in rest]
     return out

@@ -16,10 +16,14 @@ from __future__ import annotations
 
 import math
 import zlib
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from signorini.studies.work_precision.table import Run
 
 SEED = 0
 RESAMPLES = 2000
@@ -62,14 +66,14 @@ def _seed(key: Sequence[object]) -> list[int]:
     return [SEED, *(zlib.crc32(str(k).encode("utf-8")) for k in key)]
 
 
-def run_time(row: Mapping) -> Estimate:
+def run_time(run: Run) -> Estimate:
     """A run's time (``time_s``) and the bootstrap of the median of its samples, shifted by what
     ``time_s`` adds to that median (a cascade start's cost; the samples' rounding)."""
-    value = float(row["time_s"])
-    t = samples(row.get("times"))
+    value = float(run.time_s)
+    t = samples(run.times)
     if t.size < 2:
         return Estimate(value, np.full(RESAMPLES, value), False)
-    rng = np.random.default_rng(_seed((row["N"], row["config"], row["tol_label"])))
+    rng = np.random.default_rng(_seed((run.N, run.config, run.tol_label)))
     medians = np.median(t[rng.integers(0, t.size, size=(RESAMPLES, t.size))], axis=1)
     return Estimate(value, medians + (value - float(np.median(t))), True)
 

@@ -36,17 +36,21 @@ within seconds, which is what points 1 and 2 are for.  Per-job timing (the work-
 study's one job per mesh and configuration) therefore stays comparable across jobs through
 the CPU time and the reference units, not through scheduling.
 
-The clocks, the load and the sleep are a ``Machine`` (fakes in the tests).
+The clocks, the load and the sleep are a ``Machine`` (fakes in the tests); ``machine_record``
+names what a measurement ran on (cores, CPU model, virtualisation, thread settings, software).
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
+import platform
 import statistics
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field, fields
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -395,3 +399,48 @@ def stop_reason(p: Protocol, samples: Sequence[Sample], used_s: float) -> str:
 def task_summary(timer: Timer, t: Task) -> dict:
     """``Measurement.summary`` of a round-robin task."""
     return Measurement(t.samples, t.rejected, t.stop, t.result).summary(timer.protocol, timer.machine.cores)
+
+
+SOFTWARE = ("numpy", "scipy", "cvxpy")  # the distributions whose versions a record names, with Python's
+
+
+def _read(path: Path) -> str:
+    try:
+        return path.read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return ""
+
+
+def machine_record(
+    environ: Mapping[str, str] | None = None,
+    cpuinfo: Path = Path("/proc/cpuinfo"),
+    product: Path = Path("/sys/class/dmi/id/product_name"),
+) -> dict[str, Any]:
+    """What a measurement ran on: ``cores`` (``os.cpu_count``), ``usable_cores`` (the affinity
+    mask), ``cpu_model`` (``model name`` of ``cpuinfo``; "" unknown), ``hypervisor`` (the CPU's
+    ``hypervisor`` flag: the machine is virtualised; None without ``cpuinfo``), ``product`` (the
+    firmware's product name, e.g. a hypervisor's; "" unknown), ``threads`` (each of
+    ``jobenv.THREAD_VARIABLES`` in ``environ``, default this process's; "" unset) and ``software``
+    (Python's version and those of ``SOFTWARE``)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    from signorini.pipeline.jobenv import THREAD_VARIABLES
+
+    environ = os.environ if environ is None else environ
+    text = _read(cpuinfo)
+    entries = [line.split(":", 1) for line in text.splitlines() if ":" in line]
+    model = next((v.strip() for k, v in entries if k.strip() == "model name"), "")
+    flags = next((v.split() for k, v in entries if k.strip() == "flags"), None)
+    software = {"Python": platform.python_version()}
+    for name in SOFTWARE:
+        with contextlib.suppress(PackageNotFoundError):
+            software[name] = version(name)
+    return {
+        "cores": os.cpu_count(),
+        "usable_cores": usable_cores(),
+        "cpu_model": model,
+        "hypervisor": None if flags is None else "hypervisor" in flags,
+        "product": _read(product).strip(),
+        "threads": {name: environ.get(name, "") for name in THREAD_VARIABLES},
+        "software": software,
+    }

@@ -1,11 +1,14 @@
-"""Several solver configurations on one assembled system, timed round-robin under the timing
-protocol (``timing.round_robin``) and certified alike: what ``benchmarks/peers.py`` and
-``benchmarks/timing_robustness.py`` run.
+"""Several solver configurations of the work-precision study on one assembled system, timed
+round-robin under the timing protocol (``signorini.timing.round_robin``) and certified alike: what
+``benchmarks/peers.py`` and ``benchmarks/timing_robustness.py`` run (``from race import race``).
 
-A configuration started from the cascade (``SolverConfig.initial == "cascade"``, a peer's
-``_ws`` variant) gets the cascade's interpolated coarse solution (``fem.solve.cascade_start``,
-computed and timed once); its cost is added to the configuration's time, as the cascade's own
-coarse levels are part of our solver's time.
+Each configuration is called, judged and charged as the study's measurement does it
+(``signorini.studies.work_precision.measure``): its call (``timed_call``), the residual its answer
+must reach (its route's ``Runner.settings``), the classification of a failure
+(``classify_failure``), a peer's answer (``peers.outcome``), and, for a configuration started from
+the cascade (a peer's ``_ws`` variant), the start (``timed_start``, computed and timed once) whose
+cost is added to its time (``with_start``), as the cascade's own coarse levels are part of our
+solver's time.
 """
 
 from __future__ import annotations
@@ -16,8 +19,9 @@ from typing import Any
 
 import numpy as np
 
+from signorini.studies.work_precision.measure import classify_failure, timed_call, timed_start, with_start
 from signorini.studies.work_precision.study import SolverConfig, accuracy_status
-from signorini.studies.work_precision.timing import ReferenceKernel, Task, Timer, round_robin, task_summary
+from signorini.timing import ReferenceKernel, Task, Timer, round_robin, task_summary
 
 REFERENCE = "active_set"  # the reference solver of the ratios: our cascade active set
 
@@ -36,7 +40,6 @@ def _guarded(call):
 
 def _status(config: SolverConfig, disc, tol: float | None, result) -> tuple[str, str, np.ndarray | None, Any]:
     """(status, reason, u, iterations) of a task's last result, under our KKT certificate."""
-    from signorini.studies.work_precision.measure import classify_failure, solver_options
     from signorini.studies.work_precision.peers import outcome
 
     if isinstance(result, Exception):
@@ -47,9 +50,13 @@ def _status(config: SolverConfig, disc, tol: float | None, result) -> tuple[str,
             return "failed", str(answer.get("reason", answer.get("status"))), None, None
         out = outcome(config, disc, tol, answer, u)
         return out.status, out.reason, out.result.u, out.result.iterations
-    required = solver_options(config, tol, None)[1]
+    required = config.runner.settings(config, tol, None)[1]
     status, reason = accuracy_status(result.certificate.worst, required)
     return status, reason, result.u, int(result.iterations)
+
+
+def _from_cascade(config: SolverConfig) -> bool:
+    return config.initial == "cascade" and not config.exact
 
 
 def race(
@@ -65,40 +72,31 @@ def race(
     at tolerance ``tol``; per configuration the protocol's summary, status, agreement with the
     reference configuration's solution (max norm relative to ``‖u‖∞``) and the time ratios to it
     (``ratio_ref``: reference units, ``ratio_cpu``, ``ratio_wall``)."""
-    from signorini.fem.solve import cascade_start
-    from signorini.studies.work_precision.measure import timed_call, warm_up
-
     kernel = ReferenceKernel(disc.A)
     start, start_timing = None, {}
-    if any(c.initial == "cascade" and not c.exact for c in configs.values()):
-        measured = timer.measure(lambda: (cascade_start(disc), None), kernel, accept=lambda u: True)
-        start = measured.result
-        start_timing = measured.summary(timer.protocol, timer.machine.cores) if start is not None else {}
+    if any(_from_cascade(c) for c in configs.values()):
+        start, start_timing = timed_start(disc, timer, kernel)
     tasks = []
     for name, config in configs.items():
-        warm_up(config)
-        warm = config.initial == "cascade" and not config.exact
-        if warm and start is None:
+        config.runner.warm_up(config)
+        if _from_cascade(config) and start is None:
             continue  # no coarse level at this N: the variant would repeat the cold run
-        call = _guarded(timed_call(config, disc, tol, time_limit_s, route, start if warm else None))
-        tasks.append(Task(name, call, kernel, accept=lambda r, c=config: not isinstance(r, Exception)))
+        initial_guess = start if _from_cascade(config) else None
+        call = _guarded(timed_call(config, disc, tol, time_limit_s, route, initial_guess))
+        tasks.append(Task(name, call, kernel, accept=lambda r: not isinstance(r, Exception)))
     round_robin(timer, tasks)
     out = {}
     for t in tasks:
         config = configs[t.name]
         status, reason, u, iterations = _status(config, disc, tol, t.result)
         summary = task_summary(timer, t)
-        if config.initial == "cascade" and not config.exact and "time_s" in summary:
-            for key in ("time_s", "wall_s", "time_ref"):
-                summary[key] += start_timing[key]
-            summary["start_s"] = start_timing["time_s"]
         out[t.name] = {
             "label": config.label,
             "start": config.initial,
             "status": status,
             "reason": reason,
             "iterations": iterations,
-            **summary,
+            **(with_start(summary, start_timing) if _from_cascade(config) else summary),
             "_u": u,
         }
     _compare(out, reference)

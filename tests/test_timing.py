@@ -1,6 +1,6 @@
-"""The timing protocol (``signorini.studies.work_precision.timing``) on a fake machine: a
-sample under a load above the cores is rejected and redone later, reference units cancel a
-uniform slowdown, the repeats stop on a small spread, at the cap or at the budget."""
+"""The timing protocol (``signorini.timing``) on a fake machine: a sample under a load above the
+cores is rejected and redone later, reference units cancel a uniform slowdown, the repeats stop on
+a small spread, at the cap or at the budget; the record of the machine a measurement ran on."""
 
 from __future__ import annotations
 
@@ -8,7 +8,10 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from signorini.studies.work_precision import timing
+from signorini import timing
+from signorini.pipeline.jobenv import THREAD_VARIABLES
+
+OMP, OPENBLAS = THREAD_VARIABLES[0], THREAD_VARIABLES[2]  # two of the variables jobenv names
 
 
 class FakeMachine(timing.Machine):
@@ -243,3 +246,17 @@ def test_round_robin_batches_each_task_by_its_own_first_run():
     timing.round_robin(timing.Timer(protocol, m), tasks)
     assert [s.calls for s in tasks[0].samples] == [1, 4, 4] and [s.calls for s in tasks[1].samples] == [1, 1, 1]
     assert timing.task_summary(timing.Timer(protocol, m), tasks[0])["time_s"] == pytest.approx(0.25)
+
+
+def test_the_machine_record_reads_the_cpu_the_hypervisor_flag_and_the_threads(tmp_path):
+    cpuinfo = tmp_path / "cpuinfo"
+    cpuinfo.write_text("processor\t: 0\nmodel name\t: AMD EPYC\nflags\t\t: fpu sse2 hypervisor\n", encoding="utf-8")
+    product = tmp_path / "product_name"
+    product.write_text("KVM\n", encoding="utf-8")
+    record = timing.machine_record({OMP: "1"}, cpuinfo, product)
+    assert (record["cpu_model"], record["hypervisor"], record["product"]) == ("AMD EPYC", True, "KVM")
+    assert record["threads"][OMP] == "1" and record["threads"][OPENBLAS] == ""
+    cpuinfo.write_text("model name\t: Xeon\nflags\t\t: fpu sse2\n", encoding="utf-8")
+    assert timing.machine_record({}, cpuinfo, tmp_path / "missing")["hypervisor"] is False
+    unknown = timing.machine_record({}, tmp_path / "missing", tmp_path / "missing")
+    assert (unknown["cpu_model"], unknown["hypervisor"], unknown["product"]) == ("", None, "")

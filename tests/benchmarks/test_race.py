@@ -1,15 +1,29 @@
-"""Solver configurations raced on one system (``signorini.studies.work_precision.race``): round-robin
-under the timing protocol, certified alike, compared with the reference configuration."""
+"""Solver configurations raced on one system (``benchmarks/race.py``): round-robin under the timing
+protocol, certified alike, compared with the reference configuration; a configuration started from
+the cascade is charged with its start, as the study's measurement charges it."""
 
 from __future__ import annotations
 
+import importlib.util
 import math
 
-from signorini.studies.work_precision.race import REFERENCE, race
+from helpers import ROOT
+
 from signorini.studies.work_precision.study import study_configs
-from signorini.studies.work_precision.timing import Protocol, Timer
+from signorini.timing import Protocol, Timer
 
 FAST = {"wait_s": 0.0, "retries": 0, "min_repeats": 1, "budget_s": 1.0}  # no waiting for a quiet machine
+
+
+def benchmark(name: str):
+    """The script ``benchmarks/<name>.py`` as a module."""
+    spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+race = benchmark("race")
 
 
 def test_exact_routes_agree_with_the_reference_and_a_failing_one_stops_its_task_only(cache):
@@ -20,9 +34,9 @@ def test_exact_routes_agree_with_the_reference_and_a_failing_one_stops_its_task_
         "multigrid": {"solver": "multigrid", "label": "multigrid", "options": {"max_coarse": 20}},
         "truncated": {"solver": "active_set", "label": "one step", "options": {"warm_start": None, "max_iter": 1}},
     }})
-    out = race(disc, configs, None, Timer(Protocol.from_mapping(FAST)))
+    out = race.race(disc, configs, None, Timer(Protocol.from_mapping(FAST)))
     runs = out["configs"]
-    assert REFERENCE == "active_set" and list(runs) == ["active_set", "cold", "multigrid", "truncated"]
+    assert race.REFERENCE == "active_set" and list(runs) == ["active_set", "cold", "multigrid", "truncated"]
     for name in ("active_set", "cold", "multigrid"):
         assert runs[name]["status"] == "ok" and runs[name]["agreement"] <= 1e-12, (name, runs[name])
         assert runs[name]["time_s"] > 0 and runs[name]["iterations"] >= 1
@@ -30,3 +44,11 @@ def test_exact_routes_agree_with_the_reference_and_a_failing_one_stops_its_task_
     assert runs["cold"]["start"] == "cold" and runs["active_set"]["start"] == "cascade"
     assert runs["truncated"]["status"] == "failed" and math.isnan(runs["truncated"]["agreement"])
     assert out["start"] == {}  # no peer started from the cascade: no coarse solve timed for one
+
+
+def test_a_qp_solver_is_judged_against_its_tolerance(cache):
+    disc = cache.discrete({}, 11)
+    configs = study_configs({"configs": {"active_set": {"solver": "active_set"}}, "qp_solvers": ["cvxpy_osqp"]})
+    runs = race.race(disc, configs, 1e-6, Timer(Protocol.from_mapping(FAST)))["configs"]
+    assert runs["osqp"]["status"] in ("ok", "inaccurate") and runs["osqp"]["agreement"] < 1e-3
+    assert runs["osqp"]["label"] == "OSQP" and runs["osqp"]["ratio_cpu"] > 0
