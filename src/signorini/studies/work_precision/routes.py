@@ -19,10 +19,12 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+from signorini.solvers.routes import CVXPY
+
 if TYPE_CHECKING:
     from signorini.studies.work_precision.study import SolverConfig
 
-QP_PREFIX = "cvxpy_"  # cvxpy_<solver>: one of cvxpy's QP solvers
+QP_PREFIX = f"{CVXPY.name}_"  # cvxpy_<solver>: one of cvxpy's QP solvers (signorini.solvers.routes)
 
 
 class Kind(enum.Enum):
