@@ -59,9 +59,12 @@ def test_every_solver_is_named_as_the_scenes_and_the_atlas_name_it():
     ]
     assert table_solver("cvxpy_clarabel") == "CLARABEL" and table_solver("multigrid") == "multigrid"
     assert table_route("CLARABEL") == "cvxpy_clarabel" and table_route("petsc_snes") == "petsc_snes"
-    for name in ("OSQP", "osqp", "cvxpy_", "gurobi"):
+    for name in ("osqp", "cvxpy_", "gurobi"):
         with pytest.raises(UnknownSolverError, match=f"unknown solver '{name}'; choose one of the routes .*multigrid"):
             kind_of(name)
+    # cvxpy's own spelling of a QP solver: the route that runs it is named
+    with pytest.raises(UnknownSolverError, match=r"unknown solver 'OSQP' \(cvxpy_osqp for cvxpy's OSQP\); choose"):
+        kind_of("OSQP")
     with pytest.raises(UnknownSolverError, match="study.configs.osqp.solver: unknown solver 'OSQP'.*cvxpy_osqp"):
         study_configs({"configs": {"osqp": {"solver": "OSQP"}}})
     with pytest.raises(StudyConfigError, match="study.qp_solvers: 'active_set' is not a QP solver"):

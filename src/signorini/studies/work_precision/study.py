@@ -65,7 +65,8 @@ def route(solver: str) -> Runner:
             return runner
     known = ", ".join(f"{r}<solver> (e.g. {r}osqp)" if r == QP_PREFIX else r + "<solver>" if r.endswith("_") else r
                       for r in ROUTES)
-    raise UnknownSolverError(f"unknown solver {solver!r}; choose one of the routes {known}")
+    hint = f" ({QP_PREFIX}{solver.lower()} for cvxpy's {solver})" if solver.isupper() else ""
+    raise UnknownSolverError(f"unknown solver {solver!r}{hint}; choose one of the routes {known}")
 
 
 def kind_of(solver: str) -> Kind:
