@@ -21,8 +21,10 @@ from signorini.fem.norms.conventional import (
     UnknownNormError,
     boundary_part_norm,
     compute_norms,
+    element_points,
     error_field,
     parse_norm,
+    triangle_rule,
 )
 from signorini.fem.norms.conventions import MAX_POINTS, QUADRATURES, W1P_FORMS
 from signorini.fem.problem import ProblemBase
@@ -492,3 +494,29 @@ def test_the_norms_of_many_chunks_hold_one_chunks_arrays_at_a_time():
             tracemalloc.stop()
             gc.enable()
     assert peaks[61] < 2.0 * peaks[13], peaks
+
+
+@pytest.mark.parametrize("diagonal", ["sw_ne", "nw_se"])
+def test_the_triangle_rule_is_placed_at_the_vertex_its_name_says(diagonal):
+    """``dunavant8`` keeps the triangles; a Stroud rule's triangles start at the right-angle vertex
+    (``stroud4_right``) or the next one counter-clockwise (``stroud4_acute1``, ``stroud4_acute2``),
+    each triangle's own vertices in counter-clockwise order; the weights sum to the reference area."""
+    mesh = friedrichs_keller(4, diagonal)
+    X, W, t = triangle_rule(mesh.p, mesh.t, "dunavant8")
+    assert t is mesh.t and X.shape == (2, W.size) and W.sum() == pytest.approx(0.5, rel=1e-14)
+    for role, quadrature in enumerate(["stroud4_right", "stroud4_acute1", "stroud4_acute2"]):
+        X, W, t = triangle_rule(mesh.p, mesh.t, quadrature)
+        assert W.sum() == pytest.approx(0.5, rel=1e-14)
+        assert np.array_equal(np.sort(t, axis=0), np.sort(mesh.t, axis=0))  # the same triangles
+        v = mesh.p[:, t]  # (2, 3, E)
+        e1, e2 = v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
+        assert np.all(e1[0] * e2[1] - e1[1] * e2[0] > 0)  # counter-clockwise
+        right = np.roll(v, role, axis=1)  # back to the right-angle vertex first
+        a, b = right[:, 1] - right[:, 0], right[:, 2] - right[:, 0]
+        np.testing.assert_allclose(np.sum(a * b, axis=0), 0.0, atol=1e-15)
+
+
+def test_the_point_sets_of_the_maxima():
+    assert element_points("vertices").shape == (2, 3) and element_points("midpoints").shape == (2, 3)
+    both = np.hstack([element_points("vertices"), element_points("midpoints")])
+    np.testing.assert_array_equal(element_points("all"), both)

@@ -156,6 +156,14 @@ def _rolled_t(p: np.ndarray, t: np.ndarray, role: int) -> np.ndarray:
     return np.vstack([tt[(start + k) % 3, cols] for k in range(3)])
 
 
+def triangle_rule(p: np.ndarray, t: np.ndarray, quadrature: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The conventions' triangle rule ``quadrature`` placed on the triangles ``t``: its reference
+    points (2, q) and weights (q,), and the triangles with their vertices in the order that puts
+    a Stroud rule's collapsed vertex where the rule names it (``t`` itself for ``dunavant8``)."""
+    X, W, role = _reference_rule(quadrature)
+    return X, W, t if role is None else _rolled_t(p, t, role)
+
+
 def p1_at_points(
     p: np.ndarray, t: np.ndarray, u_h: np.ndarray, X: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -179,8 +187,9 @@ def p1_at_points(
     return x, value, grad[:, :, None], np.abs(det)
 
 
-def _element_points(mesh: MeshTri, which: str) -> np.ndarray:
-    """Reference coordinates of the per-triangle max points: vertices and/or edge midpoints."""
+def element_points(which: str) -> np.ndarray:
+    """Reference coordinates (2, q) of the per-triangle point set ``which`` of the maxima: the
+    vertices, the edge midpoints, or both (``all``, the triangle rule's points apart)."""
     verts = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
     mids = np.array([[0.5, 0.5, 0.0], [0.0, 0.5, 0.5]])
     return {"vertices": verts, "midpoints": mids}.get(which, np.hstack([verts, mids]))
@@ -257,8 +266,7 @@ def _error_field(
     def at_quadrature(gradient: bool) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
         key = "quadrature" if gradient or "quadrature" in cache else "values"
         if key not in cache:
-            X, W, role = _reference_rule(conv.quadrature)
-            tq = t if role is None else _rolled_t(mesh.p, t, role)
+            X, W, tq = triangle_rule(mesh.p, t, conv.quadrature)
             x, uh, duh, det = p1_at_points(mesh.p, tq, u_h, X)
             cache[key] = error_at(x, uh, duh, gradient)
             cache["dx"] = det[:, None] * W[None, :]
@@ -269,7 +277,7 @@ def _error_field(
             return at_quadrature(gradient)[:2]
         key = which if gradient or which in cache else f"{which} values"
         if key not in cache:
-            x, uh, duh, _ = p1_at_points(mesh.p, t, u_h, _element_points(mesh, which))
+            x, uh, duh, _ = p1_at_points(mesh.p, t, u_h, element_points(which))
             pe, pde = error_at(x, uh, duh, gradient)
             if which == "all":
                 e, de, _ = at_quadrature(gradient)

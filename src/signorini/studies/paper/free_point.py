@@ -106,16 +106,16 @@ def point_set(problem: Problem, mesh: MeshTri, u_h: np.ndarray, conventions: Con
     """``e`` and ``∇e`` on the conventions' point set ``which`` (``vertices``, ``midpoints``,
     ``quadrature`` or ``all``) of every triangle, placed as ``fem.norms.conventional.error_field``
     places them (the triangle rule of a Stroud rule rotated to its collapsed vertex)."""
-    from signorini.fem.norms.conventional import _element_points, _reference_rule, _rolled_t
+    from signorini.fem.norms.conventional import element_points, triangle_rule
 
     sets = []
     if which in ("vertices", "all"):
-        sets.append(("vertex", _element_points(mesh, "vertices"), mesh.t))
+        sets.append(("vertex", element_points("vertices"), mesh.t))
     if which in ("midpoints", "all"):
-        sets.append(("edge midpoint", _element_points(mesh, "midpoints"), mesh.t))
+        sets.append(("edge midpoint", element_points("midpoints"), mesh.t))
     if which in ("quadrature", "all"):
-        X, _, role = _reference_rule(conventions.quadrature)
-        sets.append(("quadrature point", X, mesh.t if role is None else _rolled_t(mesh.p, mesh.t, role)))
+        X, _, t = triangle_rule(mesh.p, mesh.t, conventions.quadrature)
+        sets.append(("quadrature point", X, t))
     found = [errors_at(problem, mesh, u_h, X, t) for _, X, t in sets]
     kinds = np.concatenate([np.full(f.e.size, kind) for (kind, _, _), f in zip(sets, found, strict=True)])
     return Points(*(np.concatenate([getattr(f, a) for f in found], axis=-1) for a in ("x", "e", "de")), kinds)

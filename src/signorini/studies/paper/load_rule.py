@@ -18,7 +18,7 @@ import numpy as np
 from skfem import MeshTri
 
 from signorini.fem.discrete import DiscreteProblem
-from signorini.fem.norms.conventional import _reference_rule, _rolled_t, evaluate_norms, p1_at_points
+from signorini.fem.norms.conventional import evaluate_norms, p1_at_points, triangle_rule
 from signorini.fem.norms.conventions import Conventions
 from signorini.fem.problem import Problem
 from signorini.fem.solve import solve_discrete
@@ -32,8 +32,7 @@ COLUMNS = ["N", "h", "norm", "default_load", "rule_load", "relative_change", "lo
 def load_vector_by_rule(mesh: MeshTri, problem: Problem, quadrature: str) -> np.ndarray:
     """``b_i = ∫ f φ_i`` by the named triangle rule of the conventions (``Conventions.quadrature``),
     collapsed at the vertex the conventions' norms use: the right-hand side as the paper states it."""
-    X, W, role = _reference_rule(quadrature)
-    t = mesh.t if role is None else _rolled_t(mesh.p, mesh.t, role)
+    X, W, t = triangle_rule(mesh.p, mesh.t, quadrature)
     n = mesh.p.shape[1]
     x, _, _, det = p1_at_points(mesh.p, t, np.zeros(n), X)  # the points and |det J| of the rule
     lam = np.vstack([1.0 - X[0] - X[1], X[0], X[1]])  # (3, q): the P1 basis at the points
