@@ -18,6 +18,7 @@ from signorini.solvers.routes import (
     EXACT_SOLVERS,
     MULTIGRID_FROM_UNKNOWNS,
     QP_OPTION,
+    ROUTES,
     SOLVERS,
     exact_route,
     resolve,
@@ -39,7 +40,8 @@ def route_functions() -> dict[str, Callable[..., SolveResult]]:
     from signorini.solvers.cvxpy_qp import cvxpy_solve
     from signorini.solvers.multigrid import multigrid_solve
 
-    return {"direct": active_set_solve, "multigrid": multigrid_solve, "cvxpy": cvxpy_solve}
+    functions = {f.__name__: f for f in (active_set_solve, cvxpy_solve, multigrid_solve)}
+    return {name: functions[route.function] for name, route in ROUTES.items()}
 
 
 def solve(name: str, A: sp.spmatrix, b: np.ndarray, constrained: np.ndarray, **options) -> SolveResult:
