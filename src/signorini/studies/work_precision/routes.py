@@ -19,12 +19,12 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from signorini.solvers.routes import CVXPY
+from signorini.solvers import routes as solver_routes
 
 if TYPE_CHECKING:
     from signorini.studies.work_precision.study import SolverConfig
 
-QP_PREFIX = f"{CVXPY.name}_"  # cvxpy_<solver>: one of cvxpy's QP solvers (signorini.solvers.routes)
+QP_PREFIX = f"{solver_routes.CVXPY.name}_"  # cvxpy_<solver>: one of cvxpy's QP solvers (signorini.solvers.routes)
 
 
 class Kind(enum.Enum):
@@ -78,13 +78,14 @@ class Runner:
 
 class Exact(Runner):
     """Our certified active-set routes through ``fem.solve.solve_discrete`` (``warm_start``: the
-    cascade unless null), certified to ``kkt_tol`` (default 1e-10); a tolerance does not apply."""
+    cascade unless null), certified to ``kkt_tol`` (the routes' default: ``solvers.routes``); a
+    tolerance does not apply."""
 
     kind = Kind.EXACT
 
     def settings(self, config: SolverConfig, tol: float | None, limit: float | None) -> tuple[dict, float]:
         options = dict(config.options)
-        return options, float(options.get("kkt_tol", 1e-10))
+        return options, float(options.get("kkt_tol", solver_routes.DIRECT.options["kkt_tol"].default))
 
     def call(self, config: SolverConfig, disc: Any, tol: float | None, options: dict) -> Callable[[], tuple]:
         from signorini.fem.solve import solve_discrete
