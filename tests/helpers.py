@@ -17,6 +17,7 @@ from pathlib import Path
 
 import meshio
 import numpy as np
+from snakemake_server import Server
 
 from signorini.pipeline.config import load_config
 from signorini.pipeline.paths import PEER_DRIVER
@@ -63,15 +64,14 @@ def clone_built(repo: Path, dest: Path) -> Path:
     return dest
 
 
+_SERVER = Server()
+
+
 def snakemake(workdir: Path, *args: str, check: bool = True, timeout: float = 600) -> subprocess.CompletedProcess:
-    proc = subprocess.run(
-        [SNAKEMAKE, *args],
-        cwd=workdir,
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        env={**os.environ, "PYTHONDONTWRITEBYTECODE": "1"},
-    )
+    """``snakemake args...`` run in ``workdir`` (by a child of ``snakemake_server``: the command without
+    its import time); raises with the output's tail when it fails and ``check``."""
+    env = {**os.environ, "PYTHONDONTWRITEBYTECODE": "1"}
+    proc = _SERVER.run(SNAKEMAKE, list(args), workdir, env, timeout)
     if check and proc.returncode != 0:
         raise AssertionError(f"snakemake {' '.join(args)} failed:\n{proc.stdout[-3000:]}\n{proc.stderr[-6000:]}")
     return proc

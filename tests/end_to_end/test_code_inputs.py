@@ -4,8 +4,8 @@
 The edit matrix, in a copy of the built repository (``conftest.built_repo``): every job of the whole
 DAG lists its script's import closure, and appending a comment to a module plans, in a dry run,
 exactly the jobs whose stage imports the module (directly or indirectly) and the jobs downstream of
-them.  The edits are made for one module of each distinct set of jobs (and the modules the design
-test names); the dry runs happen in one interpreter (``snakemake.cli.main`` called in a loop)."""
+them.  The edits are made for modules of every reach (and the modules the design test names); the dry
+runs happen in one interpreter (``snakemake.cli.main`` called in a loop)."""
 
 from __future__ import annotations
 
@@ -101,10 +101,12 @@ def dry_runs(repo: Path, modules: list[str] | None) -> dict[str, list[dict]]:
 def edit_matrix(built_repo, tmp_path_factory):
     """{module: planned jobs after its edit}, the whole DAG (``""``) and the repository copy.
 
-    Every module is checked through the code inputs the DAG declares (``test_every_job_lists_its_closure``);
-    a module is edited for real when it is the first of the modules whose edit must rerun the same jobs
-    (one per distinct set, and the modules ``NAMED``): the others rerun what it does by construction, since
-    Snakemake plans a job when any of its inputs is newer than its outputs."""
+    Every module is checked through the code inputs the DAG declares (``test_every_job_lists_its_closure``):
+    an edit of it is newer than the outputs of exactly the jobs that import it, and Snakemake plans a job
+    when any of its inputs is newer than its outputs.  What is left to check is that the plan follows
+    (downstream jobs included, the cache check not interfering), for edits of every reach: the modules
+    ``NAMED``, and the first module of the smallest, the largest and three intermediate sets of jobs
+    an edit must rerun."""
     repo = clone_built(built_repo, tmp_path_factory.mktemp("matrix"))
     runs = dry_runs(repo, None)
     modules = sorted(p.relative_to(repo).as_posix() for p in (repo / "src/signorini").rglob("*.py"))
@@ -112,7 +114,9 @@ def edit_matrix(built_repo, tmp_path_factory):
     code = closures(repo, runs[""])
     for module in modules:
         first.setdefault(frozenset(expected_after_edit(runs[""], module, code)), module)
-    edited = sorted(set(first.values()) | {f"src/signorini/{m}" for m in NAMED})
+    by_reach = [first[jobs] for jobs in sorted(first, key=lambda jobs: (len(jobs), first[jobs]))]
+    spread = {by_reach[round(q * (len(by_reach) - 1))] for q in (0, 0.25, 0.5, 0.75, 1)}
+    edited = sorted(spread | {f"src/signorini/{m}" for m in NAMED})
     return repo, runs | dry_runs(repo, edited)
 
 

@@ -97,3 +97,24 @@ def test_a_module_written_after_its_importer_was_cached_is_found(tmp_path):
     (src / "signorini/stage").mkdir()
     (src / "signorini/stage/__init__.py").write_text("")
     assert closure() == {"signorini/__init__.py", "signorini/stage/__init__.py"}
+
+
+def test_one_cache_reads_each_file_once(tmp_path, monkeypatch):
+    """The Snakefile asks one cache for the closures of every rule's script: files the closures share
+    are read and hashed once, and the closures are the ones computed without a cache."""
+    import signorini.pipeline.codedeps as codedeps
+
+    src = tmp_path / "src"
+    (src / "signorini").mkdir(parents=True)
+    for name, text in {"__init__.py": "", "a.py": "from signorini import b\n", "b.py": ""}.items():
+        (src / "signorini" / name).write_text(text)
+    scripts = [tmp_path / "one.py", tmp_path / "two.py"]
+    for script in scripts:
+        script.write_text("from signorini import a\n")
+    read = []
+    digest = codedeps._digest
+    monkeypatch.setattr(codedeps, "_digest", lambda path: read.append(path.name) or digest(path))
+    cache = ImportCache(tmp_path / "imports.json")
+    closures = [import_closure(script, src, cache) for script in scripts]
+    assert sorted(read) == ["__init__.py", "a.py", "b.py", "one.py", "two.py"]
+    assert closures == [import_closure(script, src) for script in scripts]

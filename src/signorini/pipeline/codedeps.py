@@ -117,11 +117,19 @@ class ImportCache:
         except (OSError, ValueError):
             self._entries = {}
         self._changed = False
+        # one parse of the Snakefile asks for the same files' imports for every rule: answered once
+        self._known: dict[tuple[Path, Path], frozenset[Path]] = {}
 
     def direct(self, path: Path, src: Path) -> frozenset[Path]:
         """``path``'s direct package imports under ``src``: the imported names from the cache when
         the file is unchanged, resolved to files as they are now (the cache holds names, not files,
-        so that a module created, moved or deleted after its importer was read is seen)."""
+        so that a module created, moved or deleted after its importer was read is seen; within the
+        life of this cache, which one parse of the Snakefile creates, a file is read once)."""
+        if (path, src) not in self._known:
+            self._known[path, src] = self._direct(path, src)
+        return self._known[path, src]
+
+    def _direct(self, path: Path, src: Path) -> frozenset[Path]:
         key, digest = f"names::{src}::{path}", _digest(path)
         entry = self._entries.get(key)
         if isinstance(entry, list) and len(entry) == 2 and entry[0] == digest:
