@@ -52,7 +52,7 @@ check: setup
 
 ## test: set up, then run the test suite on $(CORES) workers, a test file per worker (what .ci/run calls)
 test: setup
-	$(BIN)/pytest -q -n $(CORES) --dist loadfile --durations=15
+	$(BIN)/pytest -q -n $(CORES) --dist loadfile --no-loadscope-reorder --durations=15
 
 ## lock: recompile environment.lock from requirements.in (pinned, with hashes)
 lock:

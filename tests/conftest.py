@@ -17,14 +17,12 @@ from signorini.pipeline.jobenv import single_threaded  # noqa: E402
 
 single_threaded()
 
-import fcntl  # noqa: E402
-import shutil  # noqa: E402
-import time  # noqa: E402
+from pathlib import Path  # noqa: E402
 
+import built_copy  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
-import yaml  # noqa: E402
-from helpers import BUILT_TARGETS, PROBLEM, SHIPPED_SCENES, TEST_SCENES, copy_repo, snakemake  # noqa: E402
+from helpers import BUILT_TARGETS, PROBLEM  # noqa: E402
 
 from signorini.fem.discrete import build  # noqa: E402
 from signorini.fem.problem import Problem  # noqa: E402
@@ -94,47 +92,36 @@ def solved(tmp_path_factory):
 
 # --- the workflow, built once ---------------------------------------------------------------
 
+def _built_targets() -> list[str]:
+    return os.environ.get("SIGNORINI_TEST_BUILT_TARGETS", "").split() or list(BUILT_TARGETS)
+
+
+def _shared_directory(tmp_path_factory) -> Path:
+    """The run's directory common to its pytest-xdist workers (the run's own one without xdist)."""
+    base = tmp_path_factory.getbasetemp()
+    return base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base
+
+
+def pytest_collection_modifyitems(config, items):
+    """The end-to-end tests last, the files that use the built copy after the others (with
+    ``--no-loadscope-reorder``, which the Makefile passes, xdist hands out files in this order): the
+    built copy is built in the background meanwhile (``built_copy``)."""
+    built = {item.path for item in items if "built_repo" in getattr(item, "fixturenames", ())}
+    items.sort(key=lambda item: ("end_to_end" in item.path.parts, item.path in built))
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _start_the_built_copy(request, tmp_path_factory):
+    """Start building the built copy at the beginning of a run that has a test needing it."""
+    if any("built_repo" in getattr(item, "fixturenames", ()) for item in request.session.items):
+        built_copy.start(_shared_directory(tmp_path_factory), _built_targets())
+
+
 @pytest.fixture(scope="session")
 def built_repo(tmp_path_factory):
     """A repository copy whose config holds the shipped scenes ``SHIPPED_SCENES``, ``TEST_SCENES`` and
     ``figures_scene: smoke``, with every target of ``BUILT_TARGETS`` built (or of the targets named
     in ``SIGNORINI_TEST_BUILT_TARGETS``, space-separated, for a run of a few test files that need
-    fewer).  Built once per run: under pytest-xdist the first worker that asks builds it under a
-    file lock in the run's shared temporary directory, and the others wait for it and use it.
-    Tests that edit or damage it work on ``helpers.clone_built`` copies."""
-    targets = os.environ.get("SIGNORINI_TEST_BUILT_TARGETS", "").split() or list(BUILT_TARGETS)
-    if not os.environ.get("PYTEST_XDIST_WORKER"):
-        return _build_repo(tmp_path_factory.mktemp("built"), targets)
-    shared = tmp_path_factory.getbasetemp().parent  # one directory per run, common to its workers
-    with open(shared / "built.lock", "w", encoding="utf-8") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        repo, done = shared / "built", shared / "built.done"
-        if not done.exists():
-            shutil.rmtree(repo, ignore_errors=True)  # a build another worker failed
-            repo.mkdir()
-            _build_repo(repo, targets)
-            done.touch()
-    return repo
-
-
-def _build_repo(dest, targets: list[str]):
-    repo = copy_repo(dest)
-    path = repo / "workflow/config.yaml"
-    config = yaml.safe_load(path.read_text())
-    config["scenes"] = {name: config["scenes"][name] for name in SHIPPED_SCENES} | TEST_SCENES
-    # the second case's EOC test reads its three finest EOCs: its four finest meshes give them
-    # unchanged (each mesh is solved on its own), at two thirds of the jobs
-    config["scenes"]["case2"]["N"] = config["scenes"]["case2"]["N"][-4:]
-    # and its convention norms in a job per mesh (the smoke scene keeps a job per norm, which the
-    # fault tests damage one at a time): a quarter of its jobs, the same values
-    config["scenes"]["case2"]["norm_jobs"] = "per_mesh"
-    config["figures_scene"] = "smoke"
-    path.write_text(yaml.safe_dump(config, sort_keys=False))
-    t0 = time.perf_counter()
-    snakemake(repo, "-c2", *targets, timeout=3600)  # a loaded 2-core machine needs more than 10 min
-    if "all" in targets and len(targets) > 1:
-        # the summary (in `all`) reads the other studies' outputs, which this run wrote after it:
-        # rendered again from them, as the next `snakemake all` of a user would
-        snakemake(repo, "-c2", "all")
-    print(f"built repository copy: {time.perf_counter() - t0:.1f} s")
-    return repo
+    fewer).  Built once per run, in the background from the run's start (``built_copy``); tests that
+    edit or damage it work on ``helpers.clone_built`` copies."""
+    return built_copy.ensure(_shared_directory(tmp_path_factory), _built_targets())
