@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from signorini.studies.work_precision.routes import Attempt
-from signorini.studies.work_precision.study import PEER_PYTHON, PEER_SOLVERS, SolverConfig, accuracy_status
+from signorini.studies.work_precision.study import PEER_SOLVERS, SolverConfig, accuracy_status
 
 DEFAULT_TOL = 1e-8  # PETSc's default snes_rtol and tao_gatol/grtol: what a default run must reach
 PROBE_TIMEOUT_S = 120.0
@@ -37,28 +37,19 @@ PEER_FIELDS = ("petsc_version", "options", "effective", "python", "setup_times",
 @dataclass
 class PeerRoute:
     """How to run the driver: interpreter, driver script, the system archive it reads, and what
-    its probe found (``available``: PETSc runs here; ``reason``: why not)."""
+    its probe found (``probe``)."""
 
     python: str
     driver: str
     system: str
     probe: dict = field(default_factory=dict)
 
-    @property
-    def available(self) -> bool:
-        return bool(self.probe.get("petsc4py"))
 
-    @property
-    def reason(self) -> str:
-        return str(self.probe.get("error", ""))
-
-
-def probe(python: str | None, driver: str | os.PathLike) -> dict:
+def probe(python: str, driver: str | os.PathLike) -> dict:
     """The driver's ``probe`` under ``python``: PETSc version and inner solvers, or
     ``{"petsc4py": False, "error": why}`` for any failure to start the peer (interpreter missing
     or not executable, numpy or petsc4py not importable, the driver crashing, an answer that is
     not the probe's JSON): the peers are then unavailable, and their runs skipped with ``why``."""
-    python = python or PEER_PYTHON
     if not Path(python).exists():
         return _unavailable(f"peer interpreter {python} not found")
     try:
@@ -73,7 +64,7 @@ def probe(python: str | None, driver: str | os.PathLike) -> dict:
     try:
         found = json.loads(proc.stdout)
     except ValueError:
-        return _unavailable(f"{where}: not the probe's JSON answer: {_last_line(proc.stdout)}")
+        found = None
     if not isinstance(found, dict) or "petsc4py" not in found:
         return _unavailable(f"{where}: not the probe's JSON answer: {_last_line(proc.stdout)}")
     if not found["petsc4py"]:
@@ -140,12 +131,6 @@ def driver_call(
     return call
 
 
-def converged(result) -> bool:
-    """Whether a ``driver_call`` result is a converged answer (else the protocol stops repeating)."""
-    answer, u = result
-    return u is not None and bool(answer.get("converged"))
-
-
 def run_peer(
     config: SolverConfig,
     route: PeerRoute,
@@ -162,11 +147,11 @@ def run_peer(
     ``boundary``).  Never raises."""
     from signorini.timing import CallFailed
 
-    if not route.available:
-        return Attempt(None, "skipped", route.reason, [])
+    if not route.probe.get("petsc4py"):
+        return Attempt(None, "skipped", str(route.probe.get("error", "")), [])
     call = driver_call(config, route, tol, time_limit_s, initial_guess)
-    try:
-        measured = timer.measure(call, kernel, accept=converged)
+    try:  # an answer that did not converge is not repeated
+        measured = timer.measure(call, kernel, accept=lambda r: r[1] is not None and bool(r[0].get("converged")))
     except CallFailed as err:  # OSError starting the interpreter, a corrupt answer file, ...
         return Attempt(None, "failed", f"{type(err.error).__name__}: {err.error}"[:300], [err.elapsed])
     answer, u = measured.result
