@@ -15,7 +15,7 @@ from signorini.plotting import new_figure, save, styled
 from signorini.published import PAPER_NORMS, label_tex
 from signorini.studies.work_precision.routes import Kind
 from signorini.studies.work_precision.study import FIGURE_NORMS, PEER_SOLVERS
-from signorini.studies.work_precision.table import Run, tolerance_order
+from signorini.studies.work_precision.table import Run, sweeps
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -198,7 +198,7 @@ def work_precision_figure(
     cols = [int(N) for N in figure_N if int(N) in Ns] or sorted({Ns[0], Ns[len(Ns) // 2], Ns[-1]})
     configs = list(configs) if configs is not None else figure_series(runs)
     shown = [r for r in runs if r.config in configs]
-    order = tolerance_order(shown)
+    order = list(sweeps(shown))
     ncol = 4 if len(cols) > 2 else 3
     solver_rows = -(-len(configs) // ncol) + 1  # the configurations and the legend's title
     key_rows = -(-(len(dict.fromkeys(lab for _, lab in order)) + 4) // 6)

@@ -22,16 +22,11 @@ from signorini.studies.work_precision import uncertainty as unc
 from signorini.studies.work_precision.routes import Kind
 from signorini.studies.work_precision.selection import digits_unchanged, keeps_digits, printed, selected_tolerances
 from signorini.studies.work_precision.study import EXACT_LABEL
-from signorini.studies.work_precision.table import Run, tolerance_order
+from signorini.studies.work_precision.table import Run, sweeps
 from signorini.timing import Protocol
 
 STOPS = ("spread", "budget", "max_repeats", "answer rejected")  # ``time_stop``: why a run's sampling ended
 NAN = math.nan
-
-
-def _by_mesh(runs: Sequence[Run], config: str, label: str) -> dict[int, Run]:
-    """The runs of one (configuration, tolerance) by N."""
-    return {r.N: r for r in runs if r.config == config and r.tol_label == label}
 
 
 def _time(run: Run | None) -> dict:
@@ -45,30 +40,20 @@ def _cell_changes(runs: Sequence[Run], Ns: Sequence[int], t1: Sequence[str], cho
     """Per (config, tolerance): Table 1 cells printed differently, worst relative change, statuses,
     the meshes on which the run keeps Table 1's digits, whether it is the selected tolerance."""
     cells = []
-    for config, label in tolerance_order(runs):
-        by = _by_mesh(runs, config, label)
-        changed, worst, answered, keeping = 0, 0.0, True, 0
-        for N in Ns:
-            run = by.get(N)
-            if run is None or digits_unchanged(run, t1) is None:
-                answered = False
-                continue
-            keeping += keeps_digits(run, t1)
-            for n in t1:
-                changed += printed(run.total[n]) != printed(run.disc[n])
-                worst = max(worst, abs(run.total[n] / run.disc[n] - 1.0))
+    for (config, label), by in sweeps(runs).items():
+        answered = [by[N] for N in Ns if N in by and digits_unchanged(by[N], t1) is not None]
+        cells_of = [(run.total[n], run.disc[n]) for run in answered for n in t1]
         last = by.get(Ns[-1])
         cells.append(
             {
                 "config": config,
                 "label": next(iter(by.values())).label,
                 "tol_label": label,
-                "exact": label == EXACT_LABEL,
-                "answered": answered,
-                "changed": changed,
+                "answered": len(answered) == len(Ns),
+                "changed": sum(printed(total) != printed(disc) for total, disc in cells_of),
                 "n_cells": len(t1) * len(Ns),
-                "worst_rel_change": worst,
-                "keeping": keeping,
+                "worst_rel_change": max([0.0, *(abs(total / disc - 1.0) for total, disc in cells_of)]),
+                "keeping": sum(keeps_digits(run, t1) for run in answered),
                 "selected": chosen.get(config) == label,
                 "statuses": [by[N].status if N in by else "—" for N in Ns],
                 "time_last": _time(last),
@@ -79,26 +64,21 @@ def _cell_changes(runs: Sequence[Run], Ns: Sequence[int], t1: Sequence[str], cho
 
 
 class Selected:
-    """The selected runs (``selection``) with their times' bootstrap (``uncertainty.run_time``):
-    ``tolerance`` per configuration, ``est[(config, N)]``, ``run[(config, N)]``."""
+    """The selected runs (``selection``): ``tolerance`` per configuration, ``run[(config, N)]`` and
+    its time's bootstrap ``est[(config, N)]`` (``uncertainty.run_time``)."""
 
     def __init__(self, runs: Sequence[Run], t1: Sequence[str]):
         self.tolerance = selected_tolerances(runs, t1)
-        self.est: dict[tuple[str, int], unc.Estimate] = {}
-        self.run: dict[tuple[str, int], Run] = {}
-        for r in runs:
-            if self.tolerance.get(r.config) == r.tol_label:
-                self.est[(r.config, r.N)], self.run[(r.config, r.N)] = unc.run_time(r), r
+        self.run = {(r.config, r.N): r for r in runs if self.tolerance.get(r.config) == r.tol_label}
+        self.est = {key: unc.run_time(r) for key, r in self.run.items()}
 
     def at(self, N: int, configs: Sequence[str] | None = None) -> dict[str, unc.Estimate]:
         """Config → time estimate of the selected runs at ``N`` (of ``configs``, default all)."""
         return {c: e for (c, n), e in self.est.items() if n == N and (configs is None or c in configs)}
 
     def entry(self, config: str, N: int) -> dict:
-        """The selected run's tolerance and time (with interval and samples)."""
-        samples = int(unc.samples(self.run[(config, N)].times).size)
-        summary = self.est[(config, N)].summary()
-        return {"config": config, "tol_label": self.tolerance[config], **summary, "samples": samples}
+        """The selected run's tolerance and time (``_time``)."""
+        return {"config": config, "tol_label": self.tolerance[config], **_time(self.run[(config, N)])}
 
 
 def _ratio(num: unc.Estimate, den: unc.Estimate) -> dict:
@@ -144,14 +124,12 @@ def _fair_race(runs: Sequence[Run], Ns: Sequence[int], sel: Selected) -> dict[st
     return out
 
 
-def _scaling(runs: Sequence[Run], Ns: Sequence[int], sel: Selected) -> dict[str, dict]:
+def _scaling(Ns: Sequence[int], sel: Selected) -> dict[str, dict]:
     """Per configuration with a selected tolerance: the exponent ``p`` of ``time ∝ unknowns^p``,
     least squares through its selected runs on every mesh, with its interval."""
-    n_dofs: dict[int, int] = {}
-    for r in runs:
-        n_dofs.setdefault(r.N, r.n_dofs)
     return {
-        config: unc.exponent([float(n_dofs[N]) for N in Ns], [sel.est[(config, N)] for N in Ns]).summary()
+        config: unc.exponent([float(sel.run[(config, N)].n_dofs) for N in Ns], [sel.est[(config, N)] for N in Ns])
+        .summary()
         for config, label in sel.tolerance.items()
         if label is not None
     }
@@ -167,8 +145,7 @@ def _l4_eocs(
 
     h = np.array([1.0 / N for N in Ns])
     eocs, exact_eoc = [], None
-    for config, label in tolerance_order(runs):
-        by = _by_mesh(runs, config, label)
+    for (config, label), by in sweeps(runs).items():
         if len(Ns) < 2 or any(N not in by for N in Ns):
             continue
         e = np.array([by[N].total["L4"] for N in Ns])
@@ -372,40 +349,14 @@ def findings(
     paper_l4_eoc: Mapping[int, float] | None = None,
     protocol: Protocol | None = None,
 ) -> dict:
-    """The numbers ``work_precision.md`` states, computed from the runs of the measurement table.
-
-    Every time below is a run's median with its interval, ``{value, lo, hi, interval, samples}``,
-    and every ratio ``{value, lo, hi, interval, verdict}`` (``uncertainty``); every time compared
-    is a selected run (``selection``).
-
-    - ``cells``: per (config, tolerance), how many Table 1 cells (``table1_norms`` × N) print
-      differently (5 significant digits) from the exact solution's, the worst relative change of a
-      total error, the statuses per N (``answered``: an answer at every N), the meshes on which
-      the run keeps Table 1's digits (``keeping``), whether it is the selected tolerance, and the
-      time on the finest mesh.
-    - ``tolerance``: per configuration its selected tolerance (None: none); ``needed``: the same
-      for the configurations that are not exact.
-    - ``selected``: per N and configuration, the selected run's tolerance and time.
-    - ``fastest``: the selected runs on the finest mesh by time, each with its ratio to the fastest.
-    - ``fair``: ``_fair_race``: per N our fastest exact configuration against the fastest other
-      one, from the same (cascade) warm start and cold against cold.
-    - ``scaling``: per configuration with a selected tolerance, the exponent ``p`` of
-      ``time ∝ unknowns^p`` through its selected runs, with its interval.
-    - ``peers``: per PETSc peer, the statuses of its runs and PETSc's converged reasons.
-    - ``eoc``: per (config, tolerance) with an answer at every N, the ``L⁴`` EOCs of the total
-      error, and the largest deviation from the published (``paper_l4_eoc``: N → EOC) and from
-      the exact EOCs; ``paper_l4`` (N → published L⁴ error) gives the relative deviation of the
-      ``L⁴`` errors themselves.
-    - ``exact``: the exact solver's times and errors per N, and the log-log slope of the
-      ``L⁴``/``W^{1,4}`` errors against total time (assembly + solve) with the time factor per digit.
-    - ``closest_l4``: per N with a published ``L⁴`` cell, the run whose total ``L⁴`` error is
-      closest to it (relative deviation), next to the exact solution's deviation.
-    - ``protocol``: what the timing protocol (``protocol``, default its defaults) did (``_protocol``).
-    - ``load``/``span_s``/``job_time_s``/``concurrent_jobs``/``counts``/``software``: the load
-      average at the measurements, the wall-clock span of the measurement jobs, their summed run
-      time, the most of them that ran at once, the status counts, and the machine and software
-      the table records.
-    """
+    """The numbers ``work_precision.md`` states, computed from the runs of the measurement table:
+    one entry per helper above (its docstring says what the entry holds).  Every time is a
+    run's median with its interval, ``{value, lo, hi, interval, samples}``, every ratio
+    ``{value, lo, hi, interval, verdict}`` (``uncertainty``); every time compared is a selected run
+    (``selection``) at the selected tolerance of its configuration (``tolerance``; ``needed``: of the
+    configurations that are not exact).  ``paper_l4`` (N → published ``L⁴`` error) and
+    ``paper_l4_eoc`` (N → published EOC) are the columns the ``L⁴`` errors and EOCs are compared
+    with; ``protocol`` the timing protocol the runs were measured under (default: its defaults)."""
     Ns = sorted({r.N for r in runs})
     t1 = [n for n in table1_norms if runs and n in runs[0].total]
     sel = Selected(runs, t1)
@@ -420,7 +371,7 @@ def findings(
         "selected": {N: {c: sel.entry(c, N) for c in sel.at(N)} for N in Ns},
         "fastest": _fastest(sel, Ns[-1]),
         "fair": _fair_race(runs, Ns, sel),
-        "scaling": _scaling(runs, Ns, sel),
+        "scaling": _scaling(Ns, sel),
         "peers": _peers(runs),
         "eoc": _l4_eocs(runs, Ns, paper_rates, paper_l4),
         "paper_l4_eoc": paper_rates,
