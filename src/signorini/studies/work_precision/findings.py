@@ -284,6 +284,8 @@ def _protocol(runs: Sequence[Run], protocol: Protocol) -> dict[str, Any]:
         "samples_min": int(counts.min()) if counts.size else 0,
         "samples_median": median(counts.astype(float)),
         "samples_max": int(counts.max()) if counts.size else 0,
+        "few": int((counts < protocol.min_repeats).sum()),
+        "single": int((counts == 1).sum()),
         "spread_median": median(spread[several]),
         "several": int(several.sum()),
         "short_s": short_s,
