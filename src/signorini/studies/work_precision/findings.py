@@ -20,7 +20,13 @@ import numpy as np
 
 from signorini.studies.work_precision import uncertainty as unc
 from signorini.studies.work_precision.routes import Kind
-from signorini.studies.work_precision.selection import digits_unchanged, keeps_digits, printed, selected_tolerances
+from signorini.studies.work_precision.selection import (
+    digits_unchanged,
+    keeps_digits,
+    printed,
+    selected_tolerances,
+    table1_norms_of,
+)
 from signorini.studies.work_precision.study import EXACT_LABEL
 from signorini.studies.work_precision.table import Run, sweeps
 from signorini.timing import Protocol
@@ -360,7 +366,7 @@ def findings(
     ``paper_l4_eoc`` (N → published EOC) are the columns the ``L⁴`` errors and EOCs are compared
     with; ``protocol`` the timing protocol the runs were measured under (default: its defaults)."""
     Ns = sorted({r.N for r in runs})
-    t1 = [n for n in table1_norms if runs and n in runs[0].total]
+    t1 = table1_norms_of(runs, table1_norms)
     sel = Selected(runs, t1)
     exact_configs = {r.config for r in runs if r.kind is Kind.EXACT}
     paper_rates = [paper_l4_eoc.get(N, NAN) for N in Ns[1:]] if paper_l4_eoc else None

@@ -22,10 +22,16 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from signorini.formatting import sci_md
+from signorini.published import TABLE1_NORMS
 from signorini.studies.work_precision.study import DEFAULT_LABEL, tolerance_key
 
 if TYPE_CHECKING:
     from signorini.studies.work_precision.table import Run
+
+
+def table1_norms_of(runs: Sequence[Run], norms: Sequence[str] | None = None) -> list[str]:
+    """Table 1's norms (``norms``, default the paper's) that the runs have errors in."""
+    return [n for n in (norms or TABLE1_NORMS) if runs and n in runs[0].total]
 
 
 def printed(x: float) -> str:
