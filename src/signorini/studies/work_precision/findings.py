@@ -108,25 +108,20 @@ def _fair_race(runs: Sequence[Run], Ns: Sequence[int], sel: Selected) -> dict[st
     solution (the start's cost included) — and ``cold_against_cold`` — ours from the cold start
     against the others from u = 0.  The ratio (other / ours) with its interval and verdict; empty
     without the selected runs of a side."""
-    def side(start: str, exact: bool) -> list[str]:
-        mine = dict.fromkeys(r.config for r in runs if r.start == start and (r.kind is Kind.EXACT) == exact)
-        return [c for c in mine if sel.tolerance.get(c)]
-
+    side = {r.config: (r.start, r.kind is Kind.EXACT) for r in runs if sel.tolerance.get(r.config)}
     out: dict[str, list[dict]] = {}
     for key, start in (("same_warm_start", "cascade"), ("cold_against_cold", "cold")):
-        ours, others = side(start, True), side(start, False)
+        ours = [c for c, s in side.items() if s == (start, True)]
+        others = [c for c, s in side.items() if s == (start, False)]
         if not ours or not others:
             continue
-        rows = []
+        out[key] = []
         for N in Ns:
             mine, theirs = sel.at(N, ours), sel.at(N, others)
-            if not mine or not theirs:
-                continue
-            a, b = min(mine, key=lambda c: mine[c].value), min(theirs, key=lambda c: theirs[c].value)
-            rows.append(
-                {"N": N, "ours": sel.entry(a, N), "other": sel.entry(b, N), "ratio": _ratio(theirs[b], mine[a])}
-            )
-        out[key] = rows
+            if mine and theirs:
+                a, b = min(mine, key=lambda c: mine[c].value), min(theirs, key=lambda c: theirs[c].value)
+                ratio = _ratio(theirs[b], mine[a])
+                out[key].append({"N": N, "ours": sel.entry(a, N), "other": sel.entry(b, N), "ratio": ratio})
     return out
 
 
@@ -150,31 +145,23 @@ def _l4_eocs(
     from signorini.fem.convergence import eoc
 
     h = np.array([1.0 / N for N in Ns])
-    eocs, exact_eoc = [], None
+    paper = np.asarray(paper_rates) if paper_rates and np.isfinite(paper_rates).any() else None
+    eocs = []
     for (config, label), by in sweeps(runs).items():
-        if len(Ns) < 2 or any(N not in by for N in Ns):
-            continue
-        e = np.array([by[N].total["L4"] for N in Ns])
-        if not np.all(np.isfinite(e)):
+        e = np.array([by[N].total["L4"] if N in by else NAN for N in Ns])
+        if len(Ns) < 2 or not np.all(np.isfinite(e)):
             continue
         rates = eoc(h, e)[1:]
         entry = {"config": config, "label": by[Ns[0]].label, "tol_label": label, "eoc": rates.tolist()}
-        entry["max_dev_paper"] = (
-            float(np.nanmax(np.abs(rates - np.asarray(paper_rates))))
-            if paper_rates and np.isfinite(paper_rates).any()
-            else NAN
-        )
+        entry["max_dev_paper"] = float(np.nanmax(np.abs(rates - paper))) if paper is not None else NAN
         if paper_l4:
             entry["l4_dev_paper"] = [
                 float(e[k] / paper_l4[N] - 1.0) if N in paper_l4 else NAN for k, N in enumerate(Ns)
             ]
-        if label == EXACT_LABEL and exact_eoc is None:
-            exact_eoc = rates
         eocs.append(entry)
+    exact = next((np.asarray(x["eoc"]) for x in eocs if x["tol_label"] == EXACT_LABEL), None)
     for entry in eocs:
-        entry["max_dev_exact"] = (
-            float(np.max(np.abs(np.asarray(entry["eoc"]) - exact_eoc))) if exact_eoc is not None else NAN
-        )
+        entry["max_dev_exact"] = float(np.max(np.abs(np.asarray(entry["eoc"]) - exact))) if exact is not None else NAN
     return eocs
 
 
@@ -200,11 +187,8 @@ def _exact_cost(Ns: Sequence[int], sel: Selected) -> dict[str, Any]:
         if n in runs[0].total and len(runs) >= 2:
             err = [r.total[n] for r in runs]
             slope = unc.exponent(total, err).summary()
-            exact[f"total_{n}"] = err
-            exact[f"slope_{n}"] = slope
-            exact[f"time_factor_per_digit_{n}"] = {
-                k: (10.0 ** (-1.0 / slope[k]) if slope[k] < 0 else math.inf) for k in ("value", "lo", "hi")
-            }
+            factor = {k: 10.0 ** (-1.0 / slope[k]) if slope[k] < 0 else math.inf for k in ("value", "lo", "hi")}
+            exact |= {f"total_{n}": err, f"slope_{n}": slope, f"time_factor_per_digit_{n}": factor}
     return exact
 
 
