@@ -33,6 +33,7 @@ from signorini.timing import Protocol
 
 STOPS = ("spread", "budget", "max_repeats", "answer rejected")  # ``time_stop``: why a run's sampling ended
 NAN = math.nan
+COST_NORMS = ("L4", "W14")  # the norms of the exact solver's cost of accuracy
 
 
 def _time(run: Run | None) -> dict:
@@ -183,7 +184,7 @@ def _exact_cost(Ns: Sequence[int], sel: Selected) -> dict[str, Any]:
         "time": [_time(r) for r in runs],
         "total_time": [t.summary() for t in total],
     }
-    for n in ("L4", "W14"):
+    for n in COST_NORMS:
         if n in runs[0].total and len(runs) >= 2:
             err = [r.total[n] for r in runs]
             slope = unc.exponent(total, err).summary()

@@ -21,6 +21,7 @@ from signorini.formatting import fmt_rel, fmt_time, h_label, md_table, sci_md
 from signorini.pipeline.jobenv import THREAD_VARIABLES
 from signorini.published import TABLE1_NORMS, label_md
 from signorini.studies.work_precision import uncertainty as unc
+from signorini.studies.work_precision.findings import COST_NORMS, findings
 from signorini.studies.work_precision.selection import swept
 from signorini.studies.work_precision.study import EXACT_LABEL, REPORT_TEMPLATE, tolerance_key
 from signorini.timing import Protocol
@@ -107,6 +108,11 @@ def _meshes(found: Mapping) -> str:
     return ", ".join(str(N) for N in found["N"])
 
 
+def _counts(counts: Mapping[str, int]) -> str:
+    """Counts by status: ``failed 2, ok 10``."""
+    return ", ".join(f"{k} {n}" for k, n in sorted(counts.items()))
+
+
 def _protocol_text(found: Mapping, protocol: Protocol) -> str:
     p = found["protocol"]
     limit = "the cores" if protocol.max_load is None else f"{protocol.max_load:g}"
@@ -147,12 +153,9 @@ def _machine_text(found: Mapping) -> str:
 
 
 def _setup(runs: Sequence[Run], found: Mapping, source: str, protocol: Protocol) -> list[str]:
-    counts = ", ".join(f"{k} {v}" for k, v in sorted(found["counts"].items()))
     solvers = ", ".join(dict.fromkeys(r.label for r in runs))
-    lines = [
-        prose("setup", meshes=_meshes(found), source=source, solvers=solvers, tolerances=_swept(runs), counts=counts),
-        _machine_text(found),
-    ]
+    numbers = {"meshes": _meshes(found), "tolerances": _swept(runs), "counts": _counts(found["counts"])}
+    lines = [prose("setup", source=source, solvers=solvers, **numbers), _machine_text(found)]
     if found["load"]:
         lines.append(prose("load", **found["load"]))
     lines.append(_protocol_text(found, protocol))
@@ -246,7 +249,7 @@ def _fair_brief(found: Mapping, labels: Mapping[str, str]) -> list[str]:
 def _cost_brief(exact: Mapping) -> list[str]:
     """The slopes of the exact solver's total errors against its total time, and per norm the cost of
     one more digit when the error falls (the slope and its whole interval below 0)."""
-    names = {"L4": "L⁴", "W14": "W^{1,4}"}
+    names = dict(zip(COST_NORMS, ("L⁴", "W^{1,4}"), strict=True))
     if any(f"slope_{n}" not in exact for n in names):
         return []
     fits = " and ".join(f"{fmt_fit(exact[f'slope_{n}'])} in {name}" for n, name in names.items())
@@ -300,12 +303,7 @@ def _peer_table(found: Mapping) -> list[str]:
     if not found["peers"]:
         return []
     rows = [
-        [
-            v["label"],
-            found["tolerance"].get(config) or "none",
-            ", ".join(f"{k} {n}" for k, n in sorted(v["statuses"].items())),
-            ", ".join(v["reasons"]) or "—",
-        ]
+        [v["label"], found["tolerance"].get(config) or "none", _counts(v["statuses"]), ", ".join(v["reasons"]) or "—"]
         for config, v in found["peers"].items()
     ]
     header = ["PETSc method", "selected tolerance", "statuses of all runs", "PETSc reasons"]
@@ -362,19 +360,10 @@ def _cost_table(found: Mapping) -> list[str]:
     exact = found["exact"]
     if not exact:
         return []
-    nan = [math.nan] * len(exact["N"])
-    rows = [
-        [
-            h_label(N),
-            fmt_time(exact["build_s"][k]),
-            fmt_timed(exact["time"][k]),
-            fmt_timed(exact["total_time"][k]),
-            sci_md(exact.get("total_L4", nan)[k]),
-            sci_md(exact.get("total_W14", nan)[k]),
-        ]
-        for k, N in enumerate(exact["N"])
-    ]
-    header = ["h", "assembly", "solve", "total", label_md("L4"), label_md("W14")]
+    errors = [exact.get(f"total_{n}", [math.nan] * len(exact["N"])) for n in COST_NORMS]
+    columns = zip(exact["N"], exact["build_s"], exact["time"], exact["total_time"], *errors, strict=True)
+    rows = [[h_label(N), fmt_time(b), fmt_timed(t), fmt_timed(s), *map(sci_md, e)] for N, b, t, s, *e in columns]
+    header = ["h", "assembly", "solve", "total", *(label_md(n) for n in COST_NORMS)]
     return _table("cost_table", header, rows, label=exact["label"])
 
 
@@ -434,7 +423,6 @@ def report_stage(
     ``timing`` block (the protocol of its measurements)."""
     from signorini.pipeline.artifacts import atomic_write_text
     from signorini.studies.paper.reference import by_mesh, read_table_csv
-    from signorini.studies.work_precision.findings import findings
     from signorini.studies.work_precision.table import read_runs
 
     runs = read_runs(csv_path)
