@@ -37,7 +37,6 @@ stage ``work_precision_measure``; ``table`` gathers the records into ``work_prec
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
 import logging
@@ -46,7 +45,7 @@ import os
 import re
 import tempfile
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -69,22 +68,9 @@ from signorini.timing import CallFailed, Protocol, ReferenceKernel, Timer, machi
 
 log = logging.getLogger(__name__)
 
-@contextlib.contextmanager
-def _solver_log(config: SolverConfig) -> Iterator[tuple[dict, Path | None]]:
-    """Solver options that send the solver's log to a temporary file (``Runner.log_option``: HiGHS),
-    and the file."""
-    option = config.runner.log_option(config)
-    if option is None:
-        yield {}, None
-        return
-    with tempfile.TemporaryDirectory(prefix="wp-log-") as tmp:
-        path = Path(tmp) / "solver.log"
-        yield {option: str(path)}, path
-
-
-def _log_reason(path: Path | None) -> str:
+def _log_reason(path: Path) -> str:
     """The status lines of a solver log (e.g. HiGHS' ``Model status : Solve error`` and its ERROR line)."""
-    if path is None or not path.exists():
+    if not path.exists():
         return ""
     keep = [
         " ".join(line.split())
@@ -282,8 +268,10 @@ def run_solver(inp: _Inputs, config: SolverConfig, tol: float | None, time_limit
         return run_peer(config, inp.peer, inp.disc, tol, time_limit_s, timer, kernel, inp.start)
     limit = None if config.exact else time_limit_s
     options, required = config.runner.settings(config, tol, limit)
-    with _solver_log(config) as (log_options, log_path):
-        call = config.runner.call(config, inp.disc, tol, options | log_options)
+    option = config.runner.log_option(config)  # a log file: the solver's own words on a failure (HiGHS)
+    with tempfile.TemporaryDirectory(prefix="wp-log-") as tmp:
+        log_path = Path(tmp) / "solver.log"
+        call = config.runner.call(config, inp.disc, tol, options | ({option: str(log_path)} if option else {}))
         try:
             measured = timer.measure(call, kernel)
         except CallFailed as err:  # a failing solver is recorded, never raised
