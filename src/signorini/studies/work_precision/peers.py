@@ -108,24 +108,24 @@ def driver_call(
     timeout = None if time_limit_s is None else float(time_limit_s) + START_SLACK_S
 
     def call():
-        with tempfile.TemporaryDirectory(prefix="wp-peer-") as tmp:
-            req = dict(request)
+        with tempfile.TemporaryDirectory(prefix="wp-peer-") as name:
+            tmp, req = Path(name), dict(request)
             if initial_guess is not None:
-                np.savez(Path(tmp) / "start.npz", u=initial_guess)
-                req["initial_guess"] = str(Path(tmp) / "start.npz")
-            (Path(tmp) / "request.json").write_text(json.dumps(req), encoding="utf-8")
-            command = [route.python, route.driver, "solve", route.system, str(Path(tmp) / "request.json"), tmp]
+                np.savez(tmp / "start.npz", u=initial_guess)
+                req["initial_guess"] = str(tmp / "start.npz")
+            (tmp / "request.json").write_text(json.dumps(req), encoding="utf-8")
+            command = [route.python, route.driver, "solve", route.system, str(tmp / "request.json"), name]
             try:
                 proc = subprocess.run(command, capture_output=True, encoding="utf-8", timeout=timeout, env=_env())
             except subprocess.TimeoutExpired:
                 return ({"status": "timeout", "reason": f"time limit ({time_limit_s:g} s)"}, None), None
-            if proc.returncode != 0 or not (Path(tmp) / "result.json").exists():
+            if proc.returncode != 0 or not (tmp / "result.json").exists():
                 reason = f"driver exited {proc.returncode}: {_last_line(proc.stderr)}"
                 return ({"status": "error", "reason": reason}, None), None
-            answer = json.loads((Path(tmp) / "result.json").read_text(encoding="utf-8"))
+            answer = json.loads((tmp / "result.json").read_text(encoding="utf-8"))
             if answer.get("status") != "done":
                 return (answer, None), None
-            u = np.load(Path(tmp) / "solution.npz")["u"]
+            u = np.load(tmp / "solution.npz")["u"]
         return (answer, u), (float(answer["solve_s"]), float(answer.get("solve_cpu_s", answer["solve_s"])))
 
     return call
@@ -165,7 +165,11 @@ def run_peer(
 
 
 def outcome(config: SolverConfig, disc, tol: float | None, answer: dict, u) -> Attempt:
-    """Status, certificate and record fields of a driver's answer."""
+    """Status, certificate and record fields of a driver's answer: a ``SolveResult`` of its ``u``
+    with the multiplier ``(Au − b)_B``, the contact set ``{i ∈ B: u_i ≤ 0}`` and the KKT certificate."""
+    from signorini.solvers.certificate import kkt_certificate
+    from signorini.solvers.result import SolveResult
+
     extra = {
         "setup_s": float(answer["setup_s"]) if "setup_s" in answer else float("nan"),
         "converged_reason": str(answer.get("converged_reason", "")),
@@ -177,7 +181,11 @@ def outcome(config: SolverConfig, disc, tol: float | None, answer: dict, u) -> A
     if answer.get("status") != "done":
         return Attempt(None, "failed", str(answer.get("reason", answer.get("status"))), [], extra)
     required = DEFAULT_TOL if tol is None else float(tol)
-    result = peer_result(config.name, disc.A, disc.b, disc.boundary, u, required, answer)
+    A, b, B, solve_s = disc.A, disc.b, disc.boundary, float(answer["solve_s"])
+    lam = (A @ u - b)[B]
+    info = {"solve_time_s": solve_s, "setup_s": float(answer["setup_s"])}
+    certificate = kkt_certificate(A, b, B, u, lam, required)
+    result = SolveResult(u, lam, B[u[B] <= 0.0], int(answer["iterations"]), solve_s, certificate, config.name, info)
     times = [float(t) for t in answer.get("solve_cpu_times", answer["solve_times"])]
     extra["kkt_required"] = required
     if not answer["converged"]:
@@ -196,23 +204,3 @@ def peer_info(answer: Mapping) -> str:
     inner = eff.get("factor_solver_type") or eff.get("hypre_type")
     kinds = f" ksp={eff.get('ksp_type')} pc={pc}{'/' + inner if inner else ''}" if pc else ""
     return f"PETSc {answer['petsc_version']}: {eff.get('type', '')}{kinds}"
-
-
-def peer_result(name: str, A, b: np.ndarray, boundary: np.ndarray, u: np.ndarray, tol: float, answer: dict):
-    """A ``SolveResult`` of a peer's ``u``: multiplier ``(Au − b)_B``, contact set ``{i ∈ B: u_i ≤ 0}``
-    and the KKT certificate at ``tol``."""
-    from signorini.solvers.certificate import kkt_certificate
-    from signorini.solvers.result import SolveResult
-
-    lam = (A @ u - b)[boundary]
-    certificate = kkt_certificate(A, b, boundary, u, lam, tol)
-    return SolveResult(
-        u=u,
-        lam=lam,
-        active=boundary[u[boundary] <= 0.0],
-        iterations=int(answer["iterations"]),
-        wall_time_s=float(answer["solve_s"]),
-        certificate=certificate,
-        solver=name,
-        info={"solve_time_s": float(answer["solve_s"]), "setup_s": float(answer["setup_s"])},
-    )
