@@ -179,10 +179,8 @@ def work_precision_figure(runs: Sequence[Run], figure_N: Sequence[int] = (), fig
             for config in configs:
                 mine = [by[N] for (c, _), by in order.items() if c == config and N in by]
                 _run_points(ax, mine, colors[config], norm, floor, lines[config])
-            ax.set_xscale("log")
-            ax.set_yscale("log")
+            ax.set(xscale="log", yscale="log", ylim=(floor / 1.5, None))
             ax.xaxis.set_minor_formatter(NullFormatter())
-            ax.set_ylim(floor / 1.5, None)
             ax.grid(True, which="major", linewidth=0.3, alpha=0.6)
             if i == 0:
                 ax.set_title(f"$h = 1/{N}$")
@@ -193,17 +191,10 @@ def work_precision_figure(runs: Sequence[Run], figure_N: Sequence[int] = (), fig
     solvers, keys = _legend_handles({r.config: r.label for r in shown}, colors, lines, tolerances)
     row = 0.24 / fig.get_figheight()  # one legend row, as a fraction of the figure's height
     title = "exact solvers and the fastest configuration of each solver family (every run: work_precision.csv)"
-    fig.legend(handles=keys, loc="lower center", bbox_to_anchor=(0.5, 0.0), ncol=6, fontsize=8, frameon=False)
-    fig.legend(
-        handles=solvers,
-        loc="lower center",
-        bbox_to_anchor=(0.5, row * (key_rows + 0.3)),
-        ncol=ncol,
-        fontsize=8,
-        frameon=False,
-        title=title,
-        title_fontsize=8,
-    )
+    below = {"loc": "lower center", "fontsize": 8, "frameon": False}
+    fig.legend(handles=keys, bbox_to_anchor=(0.5, 0.0), ncol=6, **below)
+    fig.legend(handles=solvers, bbox_to_anchor=(0.5, row * (key_rows + 0.3)), ncol=ncol, title=title, title_fontsize=8,
+               **below)
     bottom = row * (solver_rows + key_rows + 0.8)
     fig.suptitle(r"Work precision: $\|u_h^{\mathrm{solver}} - u_h^{\mathrm{exact}}\|$ against solve time")
     fig.tight_layout(rect=(0, bottom, 1, 0.97))
@@ -242,8 +233,7 @@ def cost_panel(runs: Sequence[Run], ax: Axes | None = None) -> Axes:
     ax.text(0.02, 0.98, "labels: mesh width $h$", transform=ax.transAxes, ha="left", va="top", fontsize="x-small")
     ax.set_ylim(np.nanmin(values) / 300.0, np.nanmax(values) * 8.0)
     ax.set_xlim(total.min() / 1.8, total.max() * 1.8)
-    ax.set_xlabel("total run time: assembly + solve [s]")
-    ax.set_ylabel(r"total error $\|u - u_h\|$")
+    ax.set(xlabel="total run time: assembly + solve [s]", ylabel=r"total error $\|u - u_h\|$")
     ax.set_title(f"Cost of accuracy: {ex[0].label}")
     ax.grid(True, which="major", linewidth=0.3, alpha=0.6)
     ax.legend(fontsize=8, loc="lower left", ncol=2)
@@ -301,9 +291,7 @@ def time_panel(runs: Sequence[Run], ax: Axes | None = None) -> Axes:
         style |= {"color": v["color"], "marker": v["marker"], "capsize": 2, "label": label}
         handles.append(ax.errorbar(v["n_dofs"], v["time_s"], yerr=v["yerr"], **style))
     handles += ax.loglog(n, build[0] * n / n[0], linestyle=":", color="0.6", label=r"$\propto$ unknowns")
-    ax.set_xlabel("unknowns $(N+1)^2$")
-    ax.set_ylabel(TIME_LABEL.replace("solve time", "time"))
-    ax.set_title("Where the time goes")
+    ax.set(xlabel="unknowns $(N+1)^2$", ylabel=TIME_LABEL.replace("solve time", "time"), title="Where the time goes")
     ax.grid(True, which="major", linewidth=0.3, alpha=0.6)
     # below the axes: inside, the many lines of the peers leave no free corner
     ax.legend(
