@@ -47,16 +47,13 @@ def prose(section: str, /, **fields: object) -> str:
     return _sections()[section].format(**fields)
 
 
-def _num(x: float) -> str:
-    return fmt_time(x).removesuffix(" s")
-
-
 def fmt_timed(t: Mapping) -> str:
     """A time with its interval: ``1.6 s (1.3–1.8)``, ``12.4 s (1 sample)``, ``—``."""
     if not math.isfinite(t["value"]):
         return "—"
     if t["interval"]:
-        return f"{fmt_time(t['value'])} ({_num(t['lo'])}–{_num(t['hi'])})"
+        lo, hi = (fmt_time(t[k]).removesuffix(" s") for k in ("lo", "hi"))
+        return f"{fmt_time(t['value'])} ({lo}–{hi})"
     return f"{fmt_time(t['value'])} (1 sample)" if t.get("samples") == 1 else fmt_time(t["value"])
 
 

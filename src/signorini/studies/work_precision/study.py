@@ -124,8 +124,8 @@ class SolverConfig:
     @property
     def initial(self) -> str:
         """Where the solver starts: ``cascade`` (the cascade's interpolated coarse solution) or ``cold``."""
-        if self.exact:
-            return "cold" if "warm_start" in self.options and self.options["warm_start"] is None else "cascade"
+        if self.exact:  # warm_start: null is the cold start
+            return "cold" if self.options.get("warm_start", "cascade") is None else "cascade"
         return self.start
 
     @property
