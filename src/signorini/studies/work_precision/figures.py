@@ -13,6 +13,7 @@ import numpy as np
 
 from signorini.plotting import new_figure, save, styled
 from signorini.published import PAPER_NORMS, label_tex
+from signorini.studies.work_precision import uncertainty as unc
 from signorini.studies.work_precision.routes import Kind
 from signorini.studies.work_precision.study import FIGURE_NORMS, PEER_SOLVERS
 from signorini.studies.work_precision.table import Run, sweeps
@@ -219,7 +220,7 @@ def cost_panel(runs: Sequence[Run], ax: Axes | None = None) -> Axes:
     values = np.array([[r.total[n] for n in norms] for r in ex])  # runs × norms
     for k, norm in enumerate(norms):
         e = values[:, k]
-        slope = np.polyfit(np.log(total), np.log(e), 1)[0] if len(e) > 1 else float("nan")
+        slope = unc.exponent(total, e).value  # the least-squares slope the findings fit too
         label = f"{label_tex(norm, domain=False)} (slope {slope:.2f})"
         ax.loglog(total, e, marker=MARKERS[k % len(MARKERS)], markersize=4, label=label)
     # each mesh's h above its largest error, horizontal; the limits leave room for these labels
@@ -245,7 +246,6 @@ def time_series(runs: Sequence[Run], table1_norms: Sequence[str] | None = None) 
     configuration and of the PETSc peers ``figure_series`` draws, each with its times, their
     intervals (``yerr``: below and above), its exponent ``p`` (time ∝ unknowns^p), and a colour and
     marker of its own (the colours of ``work_precision_figure``; ``EXTRA_COLORS`` for the rest)."""
-    from signorini.studies.work_precision import uncertainty as unc
     from signorini.studies.work_precision.selection import selected_runs, table1_norms_of
 
     norms = table1_norms_of(runs, table1_norms)
