@@ -91,7 +91,7 @@ def test_every_series_of_the_time_panel_has_its_own_colour_and_marker(run_row):
     df = _families(run_row)
     series = wpfig.time_series(df, ["L4"])
     assert list(series) == ["ours", "ours_cold", "ours_superlu", "ours_mg", "tao3"]
-    drawn = wpfig._config_colors(df, wpfig.figure_series(df, ["L4"]))
+    drawn = wpfig._colors(wpfig.figure_series(df, ["L4"]))
     assert series["tao3"]["color"] == drawn["tao3"] and series["tao3"]["peer"]
     assert series["ours_superlu"]["color"] in wpfig.EXTRA_COLORS
     styles = [(v["color"], v["marker"]) for v in series.values()] + [(wpfig.ASSEMBLY["color"], "s")]

@@ -176,15 +176,15 @@ def test_inaccurate_answers_are_grouped_with_their_worst_ratio_from_the_recorded
 
 
 def test_the_template_holds_the_sections_the_report_fills_and_no_others(tmp_path):
-    """Every ``prose("…")`` of the report names a section of ``report.tmpl`` and every section is
-    used; a line ending in a backslash continues on the next, braces are doubled."""
+    """Every ``prose("…")`` and ``_table("…")`` of the report names a section of ``report.tmpl`` and
+    every section is used; a line ending in a backslash continues on the next, braces are doubled."""
     import re
     from pathlib import Path
 
     from signorini.studies.work_precision import report
 
     source = Path(report.__file__).read_text(encoding="utf-8")
-    used = set(re.findall(r'prose\(\s*"(\w+)"', source)) | {"fair_same_warm_start", "fair_cold_against_cold"}
+    used = set(re.findall(r'(?:prose|_table)\(\s*"(\w+)"', source)) | {"fair_same_warm_start", "fair_cold_against_cold"}
     assert used == set(report._sections())
     template = tmp_path / "t.tmpl"
     template.write_text("comment {x}\n@@ one\nA {x} \\\nB {{y}}\nC\n\n@@ two\nD\n", encoding="utf-8")

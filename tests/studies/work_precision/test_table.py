@@ -11,7 +11,7 @@ from helpers import ROOT
 
 from signorini.pipeline.artifacts import save_json
 from signorini.studies.work_precision.routes import Kind
-from signorini.studies.work_precision.table import ID_COLUMNS, Run, read_runs, table_stage, tolerance_order, write_runs
+from signorini.studies.work_precision.table import ID_COLUMNS, Run, read_runs, sweeps, table_stage, write_runs
 
 
 def _record(N: int, config: str, tol_label: str, **extra) -> dict:
@@ -62,7 +62,7 @@ def test_the_records_of_every_job_in_one_table_sorted_by_mesh_and_configuration(
     write_runs(back, tmp_path / "again.csv")
     assert (tmp_path / "again.csv").read_bytes() == out.read_bytes()
     # the exact solver's run, then each QP solver's default and its tolerances loose to tight
-    assert tolerance_order(back) == [("exact", "exact"), ("qp", "default"), ("qp", "1e-02"), ("qp", "1e-08")]
+    assert list(sweeps(back)) == [("exact", "exact"), ("qp", "default"), ("qp", "1e-02"), ("qp", "1e-08")]
 
 
 def test_the_committed_table_is_read_and_written_again_unchanged(tmp_path):

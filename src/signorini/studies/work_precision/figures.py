@@ -13,21 +13,17 @@ import numpy as np
 
 from signorini.plotting import new_figure, save, styled
 from signorini.published import PAPER_NORMS, label_tex
+from signorini.studies.work_precision import uncertainty as unc
 from signorini.studies.work_precision.routes import Kind
 from signorini.studies.work_precision.study import FIGURE_NORMS, PEER_SOLVERS
-from signorini.studies.work_precision.table import Run, tolerance_order
+from signorini.studies.work_precision.table import Run, sweeps
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
+# by tolerance label; any other tolerance: "h"
 TOL_MARKERS = {"exact": "P", "default": "*", "1e-02": "o", "1e-04": "s", "1e-06": "^", "1e-08": "D", "1e-10": "v"}
-
-
-def _marker(label: str) -> str:
-    return TOL_MARKERS.get(label, "h")
-
-
 # Okabe & Ito's colour-blind-safe palette, in an order whose neighbours differ most; its yellow
 # (#F0E442), too weak on white for hollow markers, replaced by a mid grey
 OKABE_ITO = ["#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#000000", "#8C8C8C"]
@@ -64,13 +60,11 @@ def figure_series(runs: Sequence[Run], table1_norms: Sequence[str] | None = None
     (a backend variant goes, another route such as multigrid stays), and if that is still too many,
     the fastest exact configuration of each start on the finest mesh; their runs are in the CSV and
     the report."""
-    from signorini.published import TABLE1_NORMS
-    from signorini.studies.work_precision.selection import selected_runs
+    from signorini.studies.work_precision.selection import selected_runs, table1_norms_of
 
     exact = list(dict.fromkeys(r.config for r in runs if r.kind is Kind.EXACT))
     finest = max(r.N for r in runs)
-    norms = [n for n in (table1_norms or TABLE1_NORMS) if n in runs[0].total]
-    keeps = {r.config: r.time_s for r in selected_runs(runs, norms) if r.N == finest}
+    keeps = {r.config: r.time_s for r in selected_runs(runs, table1_norms_of(runs, table1_norms)) if r.N == finest}
     last = [r for r in runs if r.N == finest and r.status == "ok"]
     chosen = list(exact)
     others = [r for r in runs if r.config not in exact]
@@ -96,74 +90,42 @@ def figure_series(runs: Sequence[Run], table1_norms: Sequence[str] | None = None
     return chosen
 
 
-def _config_colors(runs: Sequence[Run], configs: Sequence[str] | None = None) -> dict:
+def _colors(configs: Sequence[str]) -> dict[str, str]:
     """One Okabe–Ito colour per drawn configuration (cycled beyond eight)."""
-    configs = list(configs) if configs is not None else list(dict.fromkeys(r.config for r in runs))
     return {c: OKABE_ITO[k % len(OKABE_ITO)] for k, c in enumerate(configs)}
 
 
-def _line_style(runs: Sequence[Run], config: str) -> str:
-    """Dashed for the PETSc peers, solid for the others."""
-    return "--" if any(r.kind is Kind.PEER for r in runs if r.config == config) else "-"
-
-
-def _run_points(ax, sub: Sequence[Run], config: str, order, color, norm: str, floor: float) -> None:
-    """One configuration's runs on one panel: a marker per tolerance, a line through the sweep
-    (dashed for a PETSc peer)."""
+def _run_points(ax, runs: Sequence[Run], color: str, norm: str, floor: float, line: str) -> None:
+    """One configuration's runs on one panel, loose to tight: a marker per tolerance, a line
+    (``line``: its style) through the sweep."""
     from matplotlib.transforms import blended_transform_factory
 
     top = blended_transform_factory(ax.transData, ax.transAxes)
-    runs = [next((r for r in sub if r.config == c and r.tol_label == lab), None) for c, lab in order if c == config]
     line_x, line_y = [], []
-    for r in (r for r in runs if r is not None):
-        t, e, status = r.time_s, r.alg[norm], r.status
-        marker = _marker(r.tol_label)
-        if status == "failed" and np.isfinite(t):
+    for r in runs:
+        t, e, marker = r.time_s, r.alg[norm], TOL_MARKERS.get(r.tol_label, "h")
+        if r.status == "failed" and np.isfinite(t):
             ax.plot([t], [0.96], marker="x", color=color, markersize=7, transform=top, clip_on=False)
-            continue
-        if not (np.isfinite(t) and np.isfinite(e)):
-            continue
-        y = max(e, floor)
-        face = "white" if status == "inaccurate" else color
-        size = 9 if marker == "*" else 6
-        ax.plot(
-            [t],
-            [y],
-            marker=marker,
-            color=color,
-            markerfacecolor=face,
-            markersize=size,
-            linestyle="none",
-            clip_on=False,
-            zorder=3,
-        )
-        if r.tol_label != "default":
-            line_x.append(t)
-            line_y.append(y)
+        elif np.isfinite(t) and np.isfinite(e):
+            y, face = max(e, floor), "white" if r.status == "inaccurate" else color
+            ax.plot([t], [y], marker=marker, color=color, markerfacecolor=face, markersize=9 if marker == "*" else 6,
+                    linestyle="none", clip_on=False, zorder=3)
+            if r.tol_label != "default":
+                line_x.append(t)
+                line_y.append(y)
     if len(line_x) > 1:
-        ax.plot(line_x, line_y, color=color, linewidth=0.9, alpha=0.7, zorder=2, linestyle=_line_style(sub, config))
+        ax.plot(line_x, line_y, color=color, linewidth=0.9, alpha=0.7, zorder=2, linestyle=line)
 
 
-def _legend_handles(shown: Sequence[Run], configs, colors, order) -> tuple[list, list]:
+def _legend_handles(labels: dict[str, str], colors: dict[str, str], lines: dict[str, str], tolerances) -> tuple:
     """(one handle per drawn configuration, the marker and line keys)."""
     from matplotlib.lines import Line2D
 
-    solvers = [
-        Line2D(
-            [],
-            [],
-            color=colors[c],
-            marker="o",
-            linestyle=_line_style(shown, c),
-            label=next(r.label for r in shown if r.config == c),
-        )
-        for c in configs
-        if any(r.config == c for r in shown)
-    ]
+    solvers = [Line2D([], [], color=colors[c], marker="o", linestyle=lines[c], label=labels[c]) for c in colors]
     names = {"exact": "exact (active set)", "default": "solver default"}
     keys = [
-        Line2D([], [], color="0.3", marker=_marker(lab), linestyle="none", label=names.get(lab, f"tol {lab}"))
-        for lab in dict.fromkeys(lab for _, lab in order)
+        Line2D([], [], color="0.3", marker=TOL_MARKERS.get(t, "h"), linestyle="none", label=names.get(t, f"tol {t}"))
+        for t in tolerances
     ]
     keys += [
         Line2D([], [], color="0.3", marker="o", markerfacecolor="white", linestyle="none", label="inaccurate"),
@@ -175,13 +137,11 @@ def _legend_handles(shown: Sequence[Run], configs, colors, order) -> tuple[list,
 
 
 @styled
-def work_precision_figure(
-    runs: Sequence[Run], figure_N: Sequence[int] = (), fig: Figure | None = None, configs: Sequence[str] | None = None
-) -> Figure:
+def work_precision_figure(runs: Sequence[Run], figure_N: Sequence[int] = (), fig: Figure | None = None) -> Figure:
     """Algebraic error ``‖u_h^solver − u_h^exact‖`` (rows: ``L⁴``, ``W^{1,4}``) against solve time,
     log-log, one panel column per ``N`` of ``figure_N`` (default: coarsest, middle, finest).
 
-    Drawn (``figure_series``, or ``configs``): every exact solver and the fastest configuration
+    Drawn (``figure_series``): every exact solver and the fastest configuration
     of each other solver family to Table 1's digits on the finest mesh, each with its whole
     tolerance sweep (a line through its tolerances loose to tight; dashed: PETSc), in the
     Okabe–Ito palette; one marker per tolerance (star: the solver's default); hollow markers:
@@ -196,15 +156,17 @@ def work_precision_figure(
 
     Ns = sorted({r.N for r in runs})
     cols = [int(N) for N in figure_N if int(N) in Ns] or sorted({Ns[0], Ns[len(Ns) // 2], Ns[-1]})
-    configs = list(configs) if configs is not None else figure_series(runs)
+    configs = figure_series(runs)
     shown = [r for r in runs if r.config in configs]
-    order = tolerance_order(shown)
+    order = sweeps(shown)
+    tolerances = list(dict.fromkeys(lab for _, lab in order))
+    lines = {r.config: "--" if r.kind is Kind.PEER else "-" for r in shown}  # dashed: the PETSc peers
     ncol = 4 if len(cols) > 2 else 3
     solver_rows = -(-len(configs) // ncol) + 1  # the configurations and the legend's title
-    key_rows = -(-(len(dict.fromkeys(lab for _, lab in order)) + 4) // 6)
+    key_rows = -(-(len(tolerances) + 4) // 6)
     height = 6.4 + 0.24 * (solver_rows + key_rows)
     fig = fig if fig is not None else new_figure(figsize=(4.2 * len(cols), height))
-    colors = _config_colors(runs, configs)
+    colors = _colors(configs)
     axes = fig.subplots(len(FIGURE_NORMS), len(cols), squeeze=False, sharex="col")
     for i, norm in enumerate(FIGURE_NORMS):
         alg_all = np.array([r.alg[norm] for r in shown], dtype=float)
@@ -212,16 +174,14 @@ def work_precision_figure(
         disc_min = float(np.nanmin([r.disc[norm] for r in runs]))
         floor = min(float(positive.min()) if positive.size else disc_min, 1e-4 * disc_min) / 10.0
         for j, N in enumerate(cols):
-            ax, sub = axes[i, j], [r for r in shown if r.N == N]
-            disc = next(r.disc[norm] for r in runs if r.N == N)
+            ax, disc = axes[i, j], next(r.disc[norm] for r in runs if r.N == N)
             ax.axhline(disc, color="0.2", linewidth=1.2, zorder=1)
             ax.axhline(1e-4 * disc, color="0.2", linewidth=0.8, linestyle=":", zorder=1)
             for config in configs:
-                _run_points(ax, sub, config, order, colors[config], norm, floor)
-            ax.set_xscale("log")
-            ax.set_yscale("log")
+                mine = [by[N] for (c, _), by in order.items() if c == config and N in by]
+                _run_points(ax, mine, colors[config], norm, floor, lines[config])
+            ax.set(xscale="log", yscale="log", ylim=(floor / 1.5, None))
             ax.xaxis.set_minor_formatter(NullFormatter())
-            ax.set_ylim(floor / 1.5, None)
             ax.grid(True, which="major", linewidth=0.3, alpha=0.6)
             if i == 0:
                 ax.set_title(f"$h = 1/{N}$")
@@ -229,20 +189,13 @@ def work_precision_figure(
                 ax.set_xlabel(TIME_LABEL)
             if j == 0:
                 ax.set_ylabel(f"algebraic error in {label_tex(norm, domain=False)}")
-    solvers, keys = _legend_handles(shown, configs, colors, order)
+    solvers, keys = _legend_handles({r.config: r.label for r in shown}, colors, lines, tolerances)
     row = 0.24 / fig.get_figheight()  # one legend row, as a fraction of the figure's height
     title = "exact solvers and the fastest configuration of each solver family (every run: work_precision.csv)"
-    fig.legend(handles=keys, loc="lower center", bbox_to_anchor=(0.5, 0.0), ncol=6, fontsize=8, frameon=False)
-    fig.legend(
-        handles=solvers,
-        loc="lower center",
-        bbox_to_anchor=(0.5, row * (key_rows + 0.3)),
-        ncol=ncol,
-        fontsize=8,
-        frameon=False,
-        title=title,
-        title_fontsize=8,
-    )
+    below = {"loc": "lower center", "fontsize": 8, "frameon": False}
+    fig.legend(handles=keys, bbox_to_anchor=(0.5, 0.0), ncol=6, **below)
+    fig.legend(handles=solvers, bbox_to_anchor=(0.5, row * (key_rows + 0.3)), ncol=ncol, title=title, title_fontsize=8,
+               **below)
     bottom = row * (solver_rows + key_rows + 0.8)
     fig.suptitle(r"Work precision: $\|u_h^{\mathrm{solver}} - u_h^{\mathrm{exact}}\|$ against solve time")
     fig.tight_layout(rect=(0, bottom, 1, 0.97))
@@ -267,7 +220,7 @@ def cost_panel(runs: Sequence[Run], ax: Axes | None = None) -> Axes:
     values = np.array([[r.total[n] for n in norms] for r in ex])  # runs × norms
     for k, norm in enumerate(norms):
         e = values[:, k]
-        slope = np.polyfit(np.log(total), np.log(e), 1)[0] if len(e) > 1 else float("nan")
+        slope = unc.exponent(total, e).value  # the least-squares slope the findings fit too
         label = f"{label_tex(norm, domain=False)} (slope {slope:.2f})"
         ax.loglog(total, e, marker=MARKERS[k % len(MARKERS)], markersize=4, label=label)
     # each mesh's h above its largest error, horizontal; the limits leave room for these labels
@@ -281,8 +234,7 @@ def cost_panel(runs: Sequence[Run], ax: Axes | None = None) -> Axes:
     ax.text(0.02, 0.98, "labels: mesh width $h$", transform=ax.transAxes, ha="left", va="top", fontsize="x-small")
     ax.set_ylim(np.nanmin(values) / 300.0, np.nanmax(values) * 8.0)
     ax.set_xlim(total.min() / 1.8, total.max() * 1.8)
-    ax.set_xlabel("total run time: assembly + solve [s]")
-    ax.set_ylabel(r"total error $\|u - u_h\|$")
+    ax.set(xlabel="total run time: assembly + solve [s]", ylabel=r"total error $\|u - u_h\|$")
     ax.set_title(f"Cost of accuracy: {ex[0].label}")
     ax.grid(True, which="major", linewidth=0.3, alpha=0.6)
     ax.legend(fontsize=8, loc="lower left", ncol=2)
@@ -292,15 +244,13 @@ def cost_panel(runs: Sequence[Run], ax: Axes | None = None) -> Axes:
 def time_series(runs: Sequence[Run], table1_norms: Sequence[str] | None = None) -> dict[str, dict]:
     """The solve-time series of ``time_panel``: the selected runs (``selection``) of every exact
     configuration and of the PETSc peers ``figure_series`` draws, each with its times, their
-    intervals, its exponent ``p`` (time ∝ unknowns^p), and a colour and marker of its own (the
-    colours of ``work_precision_figure``; ``EXTRA_COLORS`` for the rest)."""
-    from signorini.published import TABLE1_NORMS
-    from signorini.studies.work_precision import uncertainty as unc
-    from signorini.studies.work_precision.selection import selected_runs
+    intervals (``yerr``: below and above), its exponent ``p`` (time ∝ unknowns^p), and a colour and
+    marker of its own (the colours of ``work_precision_figure``; ``EXTRA_COLORS`` for the rest)."""
+    from signorini.studies.work_precision.selection import selected_runs, table1_norms_of
 
-    norms = [n for n in (table1_norms or TABLE1_NORMS) if n in runs[0].total]
+    norms = table1_norms_of(runs, table1_norms)
     drawn = figure_series(runs, norms)
-    palette = _config_colors(runs, drawn)
+    palette = _colors(drawn)
     extra = itertools.cycle(EXTRA_COLORS)
     sel = selected_runs(runs, norms)
     exact = list(dict.fromkeys(r.config for r in sel if r.kind is Kind.EXACT))
@@ -309,15 +259,15 @@ def time_series(runs: Sequence[Run], table1_norms: Sequence[str] | None = None) 
     for k, config in enumerate(exact + peers):
         rows = sorted((r for r in sel if r.config == config), key=lambda r: r.N)
         times = [unc.run_time(r) for r in rows]
-        bounds = np.array([t.interval or (t.value, t.value) for t in times])
+        value = np.array([t.value for t in times])
+        lo, hi = np.array([t.interval or (t.value, t.value) for t in times]).T
         n_dofs = np.array([r.n_dofs for r in rows], dtype=float)
         series[config] = {
             "label": rows[0].label,
             "peer": config in peers,
             "n_dofs": n_dofs,
-            "time_s": np.array([t.value for t in times]),
-            "lo": bounds[:, 0],
-            "hi": bounds[:, 1],
+            "time_s": value,
+            "yerr": [value - lo, hi - value],
             "p": unc.exponent(list(n_dofs), times).value,
             "color": palette.get(config) or next(extra),
             "marker": MARKERS[k % len(MARKERS)],
@@ -337,24 +287,11 @@ def time_panel(runs: Sequence[Run], ax: Axes | None = None) -> Axes:
     handles = ax.loglog(n, build, **ASSEMBLY, label="assembly (mesh, A, b)")
     for v in time_series(runs).values():
         label = f"{v['label']} ($p$ = {v['p']:.2f})" if v["peer"] else f"solve: {v['label']}"
-        bars = ax.errorbar(
-            v["n_dofs"],
-            v["time_s"],
-            yerr=[v["time_s"] - v["lo"], v["hi"] - v["time_s"]],
-            color=v["color"],
-            marker=v["marker"],
-            markersize=4 if v["peer"] else 5,
-            linestyle="--" if v["peer"] else "-",
-            capsize=2,
-            label=label,
-        )
-        handles.append(bars)
-    handles += ax.loglog(
-        n, build[0] * n / n[0], linestyle=":", color="0.6", label=r"$\propto$ unknowns"
-    )
-    ax.set_xlabel("unknowns $(N+1)^2$")
-    ax.set_ylabel(TIME_LABEL.replace("solve time", "time"))
-    ax.set_title("Where the time goes")
+        style = {"markersize": 4, "linestyle": "--"} if v["peer"] else {"markersize": 5, "linestyle": "-"}
+        style |= {"color": v["color"], "marker": v["marker"], "capsize": 2, "label": label}
+        handles.append(ax.errorbar(v["n_dofs"], v["time_s"], yerr=v["yerr"], **style))
+    handles += ax.loglog(n, build[0] * n / n[0], linestyle=":", color="0.6", label=r"$\propto$ unknowns")
+    ax.set(xlabel="unknowns $(N+1)^2$", ylabel=TIME_LABEL.replace("solve time", "time"), title="Where the time goes")
     ax.grid(True, which="major", linewidth=0.3, alpha=0.6)
     # below the axes: inside, the many lines of the peers leave no free corner
     ax.legend(

@@ -20,18 +20,20 @@ import numpy as np
 
 from signorini.studies.work_precision import uncertainty as unc
 from signorini.studies.work_precision.routes import Kind
-from signorini.studies.work_precision.selection import digits_unchanged, keeps_digits, printed, selected_tolerances
+from signorini.studies.work_precision.selection import (
+    digits_unchanged,
+    keeps_digits,
+    printed,
+    selected_tolerances,
+    table1_norms_of,
+)
 from signorini.studies.work_precision.study import EXACT_LABEL
-from signorini.studies.work_precision.table import Run, tolerance_order
+from signorini.studies.work_precision.table import Run, sweeps
 from signorini.timing import Protocol
 
 STOPS = ("spread", "budget", "max_repeats", "answer rejected")  # ``time_stop``: why a run's sampling ended
 NAN = math.nan
-
-
-def _by_mesh(runs: Sequence[Run], config: str, label: str) -> dict[int, Run]:
-    """The runs of one (configuration, tolerance) by N."""
-    return {r.N: r for r in runs if r.config == config and r.tol_label == label}
+COST_NORMS = ("L4", "W14")  # the norms of the exact solver's cost of accuracy
 
 
 def _time(run: Run | None) -> dict:
@@ -45,30 +47,20 @@ def _cell_changes(runs: Sequence[Run], Ns: Sequence[int], t1: Sequence[str], cho
     """Per (config, tolerance): Table 1 cells printed differently, worst relative change, statuses,
     the meshes on which the run keeps Table 1's digits, whether it is the selected tolerance."""
     cells = []
-    for config, label in tolerance_order(runs):
-        by = _by_mesh(runs, config, label)
-        changed, worst, answered, keeping = 0, 0.0, True, 0
-        for N in Ns:
-            run = by.get(N)
-            if run is None or digits_unchanged(run, t1) is None:
-                answered = False
-                continue
-            keeping += keeps_digits(run, t1)
-            for n in t1:
-                changed += printed(run.total[n]) != printed(run.disc[n])
-                worst = max(worst, abs(run.total[n] / run.disc[n] - 1.0))
+    for (config, label), by in sweeps(runs).items():
+        answered = [by[N] for N in Ns if N in by and digits_unchanged(by[N], t1) is not None]
+        cells_of = [(run.total[n], run.disc[n]) for run in answered for n in t1]
         last = by.get(Ns[-1])
         cells.append(
             {
                 "config": config,
                 "label": next(iter(by.values())).label,
                 "tol_label": label,
-                "exact": label == EXACT_LABEL,
-                "answered": answered,
-                "changed": changed,
+                "answered": len(answered) == len(Ns),
+                "changed": sum(printed(total) != printed(disc) for total, disc in cells_of),
                 "n_cells": len(t1) * len(Ns),
-                "worst_rel_change": worst,
-                "keeping": keeping,
+                "worst_rel_change": max([0.0, *(abs(total / disc - 1.0) for total, disc in cells_of)]),
+                "keeping": sum(keeps_digits(run, t1) for run in answered),
                 "selected": chosen.get(config) == label,
                 "statuses": [by[N].status if N in by else "—" for N in Ns],
                 "time_last": _time(last),
@@ -79,26 +71,21 @@ def _cell_changes(runs: Sequence[Run], Ns: Sequence[int], t1: Sequence[str], cho
 
 
 class Selected:
-    """The selected runs (``selection``) with their times' bootstrap (``uncertainty.run_time``):
-    ``tolerance`` per configuration, ``est[(config, N)]``, ``run[(config, N)]``."""
+    """The selected runs (``selection``): ``tolerance`` per configuration, ``run[(config, N)]`` and
+    its time's bootstrap ``est[(config, N)]`` (``uncertainty.run_time``)."""
 
     def __init__(self, runs: Sequence[Run], t1: Sequence[str]):
         self.tolerance = selected_tolerances(runs, t1)
-        self.est: dict[tuple[str, int], unc.Estimate] = {}
-        self.run: dict[tuple[str, int], Run] = {}
-        for r in runs:
-            if self.tolerance.get(r.config) == r.tol_label:
-                self.est[(r.config, r.N)], self.run[(r.config, r.N)] = unc.run_time(r), r
+        self.run = {(r.config, r.N): r for r in runs if self.tolerance.get(r.config) == r.tol_label}
+        self.est = {key: unc.run_time(r) for key, r in self.run.items()}
 
     def at(self, N: int, configs: Sequence[str] | None = None) -> dict[str, unc.Estimate]:
         """Config → time estimate of the selected runs at ``N`` (of ``configs``, default all)."""
         return {c: e for (c, n), e in self.est.items() if n == N and (configs is None or c in configs)}
 
     def entry(self, config: str, N: int) -> dict:
-        """The selected run's tolerance and time (with interval and samples)."""
-        samples = int(unc.samples(self.run[(config, N)].times).size)
-        summary = self.est[(config, N)].summary()
-        return {"config": config, "tol_label": self.tolerance[config], **summary, "samples": samples}
+        """The selected run's tolerance and time (``_time``)."""
+        return {"config": config, "tol_label": self.tolerance[config], **_time(self.run[(config, N)])}
 
 
 def _ratio(num: unc.Estimate, den: unc.Estimate) -> dict:
@@ -122,36 +109,29 @@ def _fair_race(runs: Sequence[Run], Ns: Sequence[int], sel: Selected) -> dict[st
     solution (the start's cost included) — and ``cold_against_cold`` — ours from the cold start
     against the others from u = 0.  The ratio (other / ours) with its interval and verdict; empty
     without the selected runs of a side."""
-    def side(start: str, exact: bool) -> list[str]:
-        mine = dict.fromkeys(r.config for r in runs if r.start == start and (r.kind is Kind.EXACT) == exact)
-        return [c for c in mine if sel.tolerance.get(c)]
-
+    side = {r.config: (r.start, r.kind is Kind.EXACT) for r in runs if sel.tolerance.get(r.config)}
     out: dict[str, list[dict]] = {}
     for key, start in (("same_warm_start", "cascade"), ("cold_against_cold", "cold")):
-        ours, others = side(start, True), side(start, False)
+        ours = [c for c, s in side.items() if s == (start, True)]
+        others = [c for c, s in side.items() if s == (start, False)]
         if not ours or not others:
             continue
-        rows = []
+        out[key] = []
         for N in Ns:
             mine, theirs = sel.at(N, ours), sel.at(N, others)
-            if not mine or not theirs:
-                continue
-            a, b = min(mine, key=lambda c: mine[c].value), min(theirs, key=lambda c: theirs[c].value)
-            rows.append(
-                {"N": N, "ours": sel.entry(a, N), "other": sel.entry(b, N), "ratio": _ratio(theirs[b], mine[a])}
-            )
-        out[key] = rows
+            if mine and theirs:
+                a, b = min(mine, key=lambda c: mine[c].value), min(theirs, key=lambda c: theirs[c].value)
+                ratio = _ratio(theirs[b], mine[a])
+                out[key].append({"N": N, "ours": sel.entry(a, N), "other": sel.entry(b, N), "ratio": ratio})
     return out
 
 
-def _scaling(runs: Sequence[Run], Ns: Sequence[int], sel: Selected) -> dict[str, dict]:
+def _scaling(Ns: Sequence[int], sel: Selected) -> dict[str, dict]:
     """Per configuration with a selected tolerance: the exponent ``p`` of ``time ∝ unknowns^p``,
     least squares through its selected runs on every mesh, with its interval."""
-    n_dofs: dict[int, int] = {}
-    for r in runs:
-        n_dofs.setdefault(r.N, r.n_dofs)
     return {
-        config: unc.exponent([float(n_dofs[N]) for N in Ns], [sel.est[(config, N)] for N in Ns]).summary()
+        config: unc.exponent([float(sel.run[(config, N)].n_dofs) for N in Ns], [sel.est[(config, N)] for N in Ns])
+        .summary()
         for config, label in sel.tolerance.items()
         if label is not None
     }
@@ -166,32 +146,23 @@ def _l4_eocs(
     from signorini.fem.convergence import eoc
 
     h = np.array([1.0 / N for N in Ns])
-    eocs, exact_eoc = [], None
-    for config, label in tolerance_order(runs):
-        by = _by_mesh(runs, config, label)
-        if len(Ns) < 2 or any(N not in by for N in Ns):
-            continue
-        e = np.array([by[N].total["L4"] for N in Ns])
-        if not np.all(np.isfinite(e)):
+    paper = np.asarray(paper_rates) if paper_rates and np.isfinite(paper_rates).any() else None
+    eocs = []
+    for (config, label), by in sweeps(runs).items():
+        e = np.array([by[N].total["L4"] if N in by else NAN for N in Ns])
+        if len(Ns) < 2 or not np.all(np.isfinite(e)):
             continue
         rates = eoc(h, e)[1:]
         entry = {"config": config, "label": by[Ns[0]].label, "tol_label": label, "eoc": rates.tolist()}
-        entry["max_dev_paper"] = (
-            float(np.nanmax(np.abs(rates - np.asarray(paper_rates))))
-            if paper_rates and np.isfinite(paper_rates).any()
-            else NAN
-        )
+        entry["max_dev_paper"] = float(np.nanmax(np.abs(rates - paper))) if paper is not None else NAN
         if paper_l4:
             entry["l4_dev_paper"] = [
                 float(e[k] / paper_l4[N] - 1.0) if N in paper_l4 else NAN for k, N in enumerate(Ns)
             ]
-        if label == EXACT_LABEL and exact_eoc is None:
-            exact_eoc = rates
         eocs.append(entry)
+    exact = next((np.asarray(x["eoc"]) for x in eocs if x["tol_label"] == EXACT_LABEL), None)
     for entry in eocs:
-        entry["max_dev_exact"] = (
-            float(np.max(np.abs(np.asarray(entry["eoc"]) - exact_eoc))) if exact_eoc is not None else NAN
-        )
+        entry["max_dev_exact"] = float(np.max(np.abs(np.asarray(entry["eoc"]) - exact))) if exact is not None else NAN
     return eocs
 
 
@@ -213,15 +184,12 @@ def _exact_cost(Ns: Sequence[int], sel: Selected) -> dict[str, Any]:
         "time": [_time(r) for r in runs],
         "total_time": [t.summary() for t in total],
     }
-    for n in ("L4", "W14"):
+    for n in COST_NORMS:
         if n in runs[0].total and len(runs) >= 2:
             err = [r.total[n] for r in runs]
             slope = unc.exponent(total, err).summary()
-            exact[f"total_{n}"] = err
-            exact[f"slope_{n}"] = slope
-            exact[f"time_factor_per_digit_{n}"] = {
-                k: (10.0 ** (-1.0 / slope[k]) if slope[k] < 0 else math.inf) for k in ("value", "lo", "hi")
-            }
+            factor = {k: 10.0 ** (-1.0 / slope[k]) if slope[k] < 0 else math.inf for k in ("value", "lo", "hi")}
+            exact |= {f"total_{n}": err, f"slope_{n}": slope, f"time_factor_per_digit_{n}": factor}
     return exact
 
 
@@ -307,6 +275,8 @@ def _protocol(runs: Sequence[Run], protocol: Protocol) -> dict[str, Any]:
         "samples_min": int(counts.min()) if counts.size else 0,
         "samples_median": median(counts.astype(float)),
         "samples_max": int(counts.max()) if counts.size else 0,
+        "few": int((counts < protocol.min_repeats).sum()),
+        "single": int((counts == 1).sum()),
         "spread_median": median(spread[several]),
         "several": int(several.sum()),
         "short_s": short_s,
@@ -372,42 +342,16 @@ def findings(
     paper_l4_eoc: Mapping[int, float] | None = None,
     protocol: Protocol | None = None,
 ) -> dict:
-    """The numbers ``work_precision.md`` states, computed from the runs of the measurement table.
-
-    Every time below is a run's median with its interval, ``{value, lo, hi, interval, samples}``,
-    and every ratio ``{value, lo, hi, interval, verdict}`` (``uncertainty``); every time compared
-    is a selected run (``selection``).
-
-    - ``cells``: per (config, tolerance), how many Table 1 cells (``table1_norms`` × N) print
-      differently (5 significant digits) from the exact solution's, the worst relative change of a
-      total error, the statuses per N (``answered``: an answer at every N), the meshes on which
-      the run keeps Table 1's digits (``keeping``), whether it is the selected tolerance, and the
-      time on the finest mesh.
-    - ``tolerance``: per configuration its selected tolerance (None: none); ``needed``: the same
-      for the configurations that are not exact.
-    - ``selected``: per N and configuration, the selected run's tolerance and time.
-    - ``fastest``: the selected runs on the finest mesh by time, each with its ratio to the fastest.
-    - ``fair``: ``_fair_race``: per N our fastest exact configuration against the fastest other
-      one, from the same (cascade) warm start and cold against cold.
-    - ``scaling``: per configuration with a selected tolerance, the exponent ``p`` of
-      ``time ∝ unknowns^p`` through its selected runs, with its interval.
-    - ``peers``: per PETSc peer, the statuses of its runs and PETSc's converged reasons.
-    - ``eoc``: per (config, tolerance) with an answer at every N, the ``L⁴`` EOCs of the total
-      error, and the largest deviation from the published (``paper_l4_eoc``: N → EOC) and from
-      the exact EOCs; ``paper_l4`` (N → published L⁴ error) gives the relative deviation of the
-      ``L⁴`` errors themselves.
-    - ``exact``: the exact solver's times and errors per N, and the log-log slope of the
-      ``L⁴``/``W^{1,4}`` errors against total time (assembly + solve) with the time factor per digit.
-    - ``closest_l4``: per N with a published ``L⁴`` cell, the run whose total ``L⁴`` error is
-      closest to it (relative deviation), next to the exact solution's deviation.
-    - ``protocol``: what the timing protocol (``protocol``, default its defaults) did (``_protocol``).
-    - ``load``/``span_s``/``job_time_s``/``concurrent_jobs``/``counts``/``software``: the load
-      average at the measurements, the wall-clock span of the measurement jobs, their summed run
-      time, the most of them that ran at once, the status counts, and the machine and software
-      the table records.
-    """
+    """The numbers ``work_precision.md`` states, computed from the runs of the measurement table:
+    one entry per helper above (its docstring says what the entry holds).  Every time is a
+    run's median with its interval, ``{value, lo, hi, interval, samples}``, every ratio
+    ``{value, lo, hi, interval, verdict}`` (``uncertainty``); every time compared is a selected run
+    (``selection``) at the selected tolerance of its configuration (``tolerance``; ``needed``: of the
+    configurations that are not exact).  ``paper_l4`` (N → published ``L⁴`` error) and
+    ``paper_l4_eoc`` (N → published EOC) are the columns the ``L⁴`` errors and EOCs are compared
+    with; ``protocol`` the timing protocol the runs were measured under (default: its defaults)."""
     Ns = sorted({r.N for r in runs})
-    t1 = [n for n in table1_norms if runs and n in runs[0].total]
+    t1 = table1_norms_of(runs, table1_norms)
     sel = Selected(runs, t1)
     exact_configs = {r.config for r in runs if r.kind is Kind.EXACT}
     paper_rates = [paper_l4_eoc.get(N, NAN) for N in Ns[1:]] if paper_l4_eoc else None
@@ -420,7 +364,7 @@ def findings(
         "selected": {N: {c: sel.entry(c, N) for c in sel.at(N)} for N in Ns},
         "fastest": _fastest(sel, Ns[-1]),
         "fair": _fair_race(runs, Ns, sel),
-        "scaling": _scaling(runs, Ns, sel),
+        "scaling": _scaling(Ns, sel),
         "peers": _peers(runs),
         "eoc": _l4_eocs(runs, Ns, paper_rates, paper_l4),
         "paper_l4_eoc": paper_rates,

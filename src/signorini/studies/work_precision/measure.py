@@ -37,7 +37,6 @@ stage ``work_precision_measure``; ``table`` gathers the records into ``work_prec
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
 import logging
@@ -46,7 +45,7 @@ import os
 import re
 import tempfile
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -60,6 +59,7 @@ from signorini.studies.work_precision.routes import Attempt
 from signorini.studies.work_precision.study import (
     EXACT_LABEL,
     GROWTH_EXPONENT,
+    PEER_PYTHON,
     SolverConfig,
     accuracy_status,
     table_solver,
@@ -68,22 +68,9 @@ from signorini.timing import CallFailed, Protocol, ReferenceKernel, Timer, machi
 
 log = logging.getLogger(__name__)
 
-@contextlib.contextmanager
-def _solver_log(config: SolverConfig) -> Iterator[tuple[dict, Path | None]]:
-    """Solver options that send the solver's log to a temporary file (``Runner.log_option``: HiGHS),
-    and the file."""
-    option = config.runner.log_option(config)
-    if option is None:
-        yield {}, None
-        return
-    with tempfile.TemporaryDirectory(prefix="wp-log-") as tmp:
-        path = Path(tmp) / "solver.log"
-        yield {option: str(path)}, path
-
-
-def _log_reason(path: Path | None) -> str:
+def _log_reason(path: Path) -> str:
     """The status lines of a solver log (e.g. HiGHS' ``Model status : Solve error`` and its ERROR line)."""
-    if path is None or not path.exists():
+    if not path.exists():
         return ""
     keep = [
         " ".join(line.split())
@@ -125,51 +112,6 @@ def timed_call(
         return driver_call(config, peer, tol, time_limit_s, initial_guess)
     limit = None if config.exact else time_limit_s
     return config.runner.call(config, disc, tol, config.runner.settings(config, tol, limit)[0])
-
-
-def run_solver(
-    config: SolverConfig,
-    disc,
-    tol: float | None,
-    time_limit_s: float | None = None,
-    timer: Timer | None = None,
-    kernel: ReferenceKernel | None = None,
-    peer=None,
-    initial_guess: np.ndarray | None = None,
-) -> Attempt:
-    """Solve ``disc`` (a ``DiscreteProblem``) with ``config`` at tolerance ``tol`` (None: the
-    solver's default; ignored by the active-set solver); never raises.  A PETSc peer runs by
-    ``peer`` (a ``peers.PeerRoute``), from ``initial_guess`` when given.
-
-    Timing: the protocol of ``timing`` (``timer``; the reference ``kernel`` defaults to one on
-    ``disc.A``); the record fields are in ``Attempt.extra["timing"]``.  The status compares the
-    worst relative KKT residual with ``tol`` (or the solver's default tolerance, or the
-    active-set certificate's 1e-10).
-    """
-    timer = timer or Timer()
-    kernel = kernel or ReferenceKernel(disc.A)
-    if config.peer:
-        from signorini.studies.work_precision.peers import run_peer
-
-        return run_peer(config, peer, disc, tol, time_limit_s, timer, kernel, initial_guess)
-    limit = None if config.exact else time_limit_s
-    options, required = config.runner.settings(config, tol, limit)
-    with _solver_log(config) as (log_options, log_path):
-        call = config.runner.call(config, disc, tol, options | log_options)
-        try:
-            measured = timer.measure(call, kernel)
-        except CallFailed as err:  # a failing solver is recorded, never raised
-            status, reason = classify_failure(err.error, err.elapsed, limit)
-            detail = _log_reason(log_path)
-            if detail and "time limit" not in reason:  # the solver's own words instead of cvxpy's
-                reason = f"{reason.split(':')[0]}: {detail}"
-            log.info("%s tol=%s: %s (%s) after %.2f s", config.name, tol, status, reason, err.elapsed)
-            return Attempt(None, status, reason, [*(x.cpu_s for x in err.samples), err.elapsed])
-    result = measured.result
-    extra = {"timing": measured.summary(timer.protocol, timer.machine.cores)}
-    times = [x.cpu_s for x in measured.samples]
-    status, reason = accuracy_status(result.certificate.worst, required)
-    return Attempt(result, status, reason, times, extra | {"kkt_required": required})
 
 
 def tolerance_label(tol: float | None, config: SolverConfig) -> str:
@@ -216,7 +158,9 @@ def _fingerprint(u: np.ndarray) -> str:
 
 @dataclass
 class _Inputs:
-    """What every run of one job shares: the system, the exact solution, the discretisation errors."""
+    """What every run of one job shares: the system, the exact solution, the discretisation errors,
+    the previous mesh's records, the protocol's timer and reference kernel, the machine record
+    (JSON), a peer's route (``peers.PeerRoute``) and the cascade's start (``_cascade_start``)."""
 
     disc: Any  # fem.discrete.DiscreteProblem
     exact: np.ndarray
@@ -224,27 +168,36 @@ class _Inputs:
     build_s: float
     prev: dict[str, dict]
     conventions: Any  # fem.norms.conventions.Conventions
-    peer: Any = None  # peers.PeerRoute of a PETSc peer's job
-    timer: Timer = field(default_factory=Timer)
-    kernel: ReferenceKernel | None = None
-    start: np.ndarray | None = None  # the cascade's start, for a configuration started from it
+    timer: Timer
+    kernel: ReferenceKernel
+    machine: str
+    peer: Any = None
+    start: np.ndarray | None = None
     start_timing: dict = field(default_factory=dict)
-    machine: str = ""  # machine_record as JSON, the same for every record of the job
 
 
-def _load_inputs(at: SceneMesh, inputs: Mapping[str, Any], conventions: Mapping | None) -> _Inputs:
-    """The source scene's system, exact solution and norm values (``inputs``, see ``measure_stage``)."""
+def _load_inputs(at: SceneMesh, config: SolverConfig, inputs: Mapping[str, Any], settings: Mapping) -> _Inputs:
+    """What the job's runs share (``inputs`` and ``settings``: ``conventions``, ``timing``,
+    ``peer_python``, see ``measure_stage``)."""
     from signorini.fem.discrete import DiscreteProblem
     from signorini.fem.norms.conventions import Conventions
 
     disc_err = {name: read_norm(path, name, at.N) for name, path in inputs["disc"].items()}
     A, b, boundary = load_system(inputs["system"], at.N)
     disc = DiscreteProblem(at.problem, at.N, at.diagonal, at.mesh(), A, b, boundary)
-    exact = at.load_solution(inputs["exact"])
     prev_json = inputs.get("prev")
     prev = {r["tol_label"]: r for r in load_json(prev_json)["records"]} if prev_json else {}
     build_s = float(load_json(inputs["system_json"])["timings"]["build_s"])
-    return _Inputs(disc, exact, disc_err, build_s, prev, Conventions(**dict(conventions or {})))
+    conventions = Conventions(**dict(settings["conventions"] or {}))
+    timer, kernel = Timer(Protocol.from_mapping(settings["timing"])), ReferenceKernel(A)
+    inp = _Inputs(disc, at.load_solution(inputs["exact"]), disc_err, build_s, prev, conventions, timer, kernel,
+                  json.dumps(machine_record(), sort_keys=True))
+    if config.peer:
+        from signorini.studies.work_precision.peers import PeerRoute, probe
+
+        python, driver = settings["peer_python"] or PEER_PYTHON, str(inputs["peer_driver"])
+        inp.peer = PeerRoute(python, driver, str(inputs["system"]), probe(python, driver))
+    return inp
 
 
 def timed_start(disc: Any, timer: Timer, kernel: ReferenceKernel) -> tuple[np.ndarray | None, dict]:
@@ -303,6 +256,36 @@ def _base_record(inp: _Inputs, config: SolverConfig, tol: float | None) -> dict[
     }
 
 
+def run_solver(inp: _Inputs, config: SolverConfig, tol: float | None, time_limit_s: float | None) -> Attempt:
+    """Solve the job's system with ``config`` at tolerance ``tol`` (None: the solver's default;
+    ignored by the exact routes) under the timing protocol (``inp.timer``), a PETSc peer by its
+    driver (``inp.peer``, from ``inp.start`` when given); never raises.  The status compares the
+    worst relative KKT residual with the residual the route requires (``Runner.settings``)."""
+    timer, kernel = inp.timer, inp.kernel
+    if config.peer:
+        from signorini.studies.work_precision.peers import run_peer
+
+        return run_peer(config, inp.peer, inp.disc, tol, time_limit_s, timer, kernel, inp.start)
+    limit = None if config.exact else time_limit_s
+    options, required = config.runner.settings(config, tol, limit)
+    option = config.runner.log_option(config)  # a log file: the solver's own words on a failure (HiGHS)
+    with tempfile.TemporaryDirectory(prefix="wp-log-") as tmp:
+        log_path = Path(tmp) / "solver.log"
+        call = config.runner.call(config, inp.disc, tol, options | ({option: str(log_path)} if option else {}))
+        try:
+            measured = timer.measure(call, kernel)
+        except CallFailed as err:  # a failing solver is recorded, never raised
+            status, reason = classify_failure(err.error, err.elapsed, limit)
+            detail = _log_reason(log_path)
+            if detail and "time limit" not in reason:  # the solver's own words instead of cvxpy's
+                reason = f"{reason.split(':')[0]}: {detail}"
+            log.info("%s tol=%s: %s (%s) after %.2f s", config.name, tol, status, reason, err.elapsed)
+            return Attempt(None, status, reason, [*(x.cpu_s for x in err.samples), err.elapsed])
+    extra = {"timing": measured.summary(timer.protocol, timer.machine.cores), "kkt_required": required}
+    status, reason = accuracy_status(measured.result.certificate.worst, required)
+    return Attempt(measured.result, status, reason, [x.cpu_s for x in measured.samples], extra)
+
+
 def _measure(inp: _Inputs, config: SolverConfig, tol: float | None, time_limit: float | None, norm_cache: dict) -> dict:
     """Run one (configuration, tolerance) and record its status, times, residuals and errors;
     a failed run's answer (a peer stopped by an iteration limit) gets residuals and algebraic
@@ -310,7 +293,7 @@ def _measure(inp: _Inputs, config: SolverConfig, tol: float | None, time_limit: 
     from signorini.fem.norms.conventional import evaluate_norms
 
     names = list(inp.disc_err)
-    attempt = run_solver(config, inp.disc, tol, time_limit, inp.timer, inp.kernel, inp.peer, inp.start)
+    attempt = run_solver(inp, config, tol, time_limit)
     times = attempt.times or [math.nan]
     extra = dict(attempt.extra)
     timing = with_start(extra.pop("timing", {}), inp.start_timing)
@@ -348,7 +331,7 @@ def _job_info(at, config, tolerances, time_limit, growth_exponent, inp: _Inputs,
     wall_s = time.perf_counter() - t_job
     for r in records:
         r["job_wall_s"], r["job_started"] = wall_s, started
-    info = {
+    return {
         "N": at.N,
         "config": config.as_dict(),
         "tolerances": [float(t) for t in tolerances],
@@ -372,7 +355,6 @@ def _job_info(at, config, tolerances, time_limit, growth_exponent, inp: _Inputs,
             "note": "wall_s: perf_counter over the whole stage function (loading, warm-up, solves, norms)",
         },
     }
-    return info
 
 
 def measure_stage(
@@ -388,8 +370,8 @@ def measure_stage(
     timing: Mapping | None = None,
 ) -> dict:
     """Stage ``work_precision_measure``: run one solver configuration (``SolverConfig.as_dict()``)
-    on one mesh of the scene (``at``) at its default and at every tolerance of ``tolerances``; save the records (see
-    the module docstring).
+    on one mesh of the scene (``at``) at its default and at every tolerance of ``tolerances``; save
+    the records (see the module docstring).
 
     ``inputs``: ``system`` and ``system_json`` (the source scene's ``discretise`` artifacts),
     ``exact`` (its solution), ``disc`` (its norm artifacts of this mesh, norm → path: the
@@ -400,46 +382,28 @@ def measure_stage(
     the active-set ones included).  A PETSc peer runs ``inputs["peer_driver"]`` under
     ``peer_python``; its probe (PETSc version, inner solvers) is saved with the records.
     ``timing``: the timing protocol's parameters (``timing.Protocol``; the study's ``timing`` block).
-    A configuration started from the cascade (``SolverConfig.initial``) gets the cascade's
-    interpolated coarse solution, computed (and timed) once per job; its cost is added to each run's time.
-    """
+    A peer started from the cascade gets its start once per job (``_cascade_start``)."""
     started, t_job, load_start = time.time(), time.perf_counter(), os.getloadavg()[0]
     config = SolverConfig(**config)
     time_limit = float(time_limit_s) if time_limit_s is not None else None
-    inp = _load_inputs(at, inputs, conventions)
-    if config.peer:
-        from signorini.studies.work_precision.peers import PeerRoute, probe
-        from signorini.studies.work_precision.study import PEER_PYTHON
-
-        python, driver = peer_python or PEER_PYTHON, str(inputs["peer_driver"])
-        inp.peer = PeerRoute(python, driver, str(inputs["system"]), probe(python, driver))
-    inp.timer = Timer(Protocol.from_mapping(timing))
-    inp.kernel = ReferenceKernel(inp.disc.A)
-    inp.machine = json.dumps(machine_record(), sort_keys=True)
+    settings = {"conventions": conventions, "timing": timing, "peer_python": peer_python}
+    inp = _load_inputs(at, config, inputs, settings)
     config.runner.warm_up(config)  # a peer starts a fresh process per run anyway
     no_start = _cascade_start(inp, config)
     norm_cache: dict[str, dict[str, float]] = {_fingerprint(inp.exact): inp.disc_err}
     records = []
     for tol in planned_runs(config, tolerances):
         record = _base_record(inp, config, tol)
-        skip = skip_reason(inp.prev.get(record["tol_label"]), record["n_dofs"], time_limit, float(growth_exponent))
-        skip = no_start or skip
+        prev = inp.prev.get(record["tol_label"])
+        skip = no_start or skip_reason(prev, record["n_dofs"], time_limit, float(growth_exponent))
         if skip is not None:
             record.update(status="skipped", reason=skip, time_s=math.nan, time_runs=0)
         else:
             record.update(_measure(inp, config, tol, time_limit, norm_cache))
         record.update({f"disc_{n}": v for n, v in inp.disc_err.items()})
         records.append(record)
-        log.info(
-            "N=%d %s %s: %s %s time %.3f s, L4 alg %.2e",
-            at.N,
-            config.name,
-            record["tol_label"],
-            record["status"],
-            record["reason"],
-            record["time_s"],
-            record.get("alg_L4", math.nan),
-        )
+        log.info("N=%d %s %s: %s %s time %.3f s, L4 alg %.2e", at.N, config.name, record["tol_label"],
+                 record["status"], record["reason"], record["time_s"], record.get("alg_L4", math.nan))
     info = _job_info(at, config, tolerances, time_limit, growth_exponent, inp, records, (started, t_job, load_start))
     save_json(out_json, info)
     return info

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from signorini.studies.work_precision.routes import Attempt
-from signorini.studies.work_precision.study import PEER_PYTHON, PEER_SOLVERS, SolverConfig, accuracy_status
+from signorini.studies.work_precision.study import PEER_SOLVERS, SolverConfig, accuracy_status
 
 DEFAULT_TOL = 1e-8  # PETSc's default snes_rtol and tao_gatol/grtol: what a default run must reach
 PROBE_TIMEOUT_S = 120.0
@@ -37,28 +37,19 @@ PEER_FIELDS = ("petsc_version", "options", "effective", "python", "setup_times",
 @dataclass
 class PeerRoute:
     """How to run the driver: interpreter, driver script, the system archive it reads, and what
-    its probe found (``available``: PETSc runs here; ``reason``: why not)."""
+    its probe found (``probe``)."""
 
     python: str
     driver: str
     system: str
     probe: dict = field(default_factory=dict)
 
-    @property
-    def available(self) -> bool:
-        return bool(self.probe.get("petsc4py"))
 
-    @property
-    def reason(self) -> str:
-        return str(self.probe.get("error", ""))
-
-
-def probe(python: str | None, driver: str | os.PathLike) -> dict:
+def probe(python: str, driver: str | os.PathLike) -> dict:
     """The driver's ``probe`` under ``python``: PETSc version and inner solvers, or
     ``{"petsc4py": False, "error": why}`` for any failure to start the peer (interpreter missing
     or not executable, numpy or petsc4py not importable, the driver crashing, an answer that is
     not the probe's JSON): the peers are then unavailable, and their runs skipped with ``why``."""
-    python = python or PEER_PYTHON
     if not Path(python).exists():
         return _unavailable(f"peer interpreter {python} not found")
     try:
@@ -73,7 +64,7 @@ def probe(python: str | None, driver: str | os.PathLike) -> dict:
     try:
         found = json.loads(proc.stdout)
     except ValueError:
-        return _unavailable(f"{where}: not the probe's JSON answer: {_last_line(proc.stdout)}")
+        found = None
     if not isinstance(found, dict) or "petsc4py" not in found:
         return _unavailable(f"{where}: not the probe's JSON answer: {_last_line(proc.stdout)}")
     if not found["petsc4py"]:
@@ -117,33 +108,27 @@ def driver_call(
     timeout = None if time_limit_s is None else float(time_limit_s) + START_SLACK_S
 
     def call():
-        with tempfile.TemporaryDirectory(prefix="wp-peer-") as tmp:
-            req = dict(request)
+        with tempfile.TemporaryDirectory(prefix="wp-peer-") as name:
+            tmp, req = Path(name), dict(request)
             if initial_guess is not None:
-                np.savez(Path(tmp) / "start.npz", u=initial_guess)
-                req["initial_guess"] = str(Path(tmp) / "start.npz")
-            (Path(tmp) / "request.json").write_text(json.dumps(req), encoding="utf-8")
-            command = [route.python, route.driver, "solve", route.system, str(Path(tmp) / "request.json"), tmp]
+                np.savez(tmp / "start.npz", u=initial_guess)
+                req["initial_guess"] = str(tmp / "start.npz")
+            (tmp / "request.json").write_text(json.dumps(req), encoding="utf-8")
+            command = [route.python, route.driver, "solve", route.system, str(tmp / "request.json"), name]
             try:
                 proc = subprocess.run(command, capture_output=True, encoding="utf-8", timeout=timeout, env=_env())
             except subprocess.TimeoutExpired:
                 return ({"status": "timeout", "reason": f"time limit ({time_limit_s:g} s)"}, None), None
-            if proc.returncode != 0 or not (Path(tmp) / "result.json").exists():
+            if proc.returncode != 0 or not (tmp / "result.json").exists():
                 reason = f"driver exited {proc.returncode}: {_last_line(proc.stderr)}"
                 return ({"status": "error", "reason": reason}, None), None
-            answer = json.loads((Path(tmp) / "result.json").read_text(encoding="utf-8"))
+            answer = json.loads((tmp / "result.json").read_text(encoding="utf-8"))
             if answer.get("status") != "done":
                 return (answer, None), None
-            u = np.load(Path(tmp) / "solution.npz")["u"]
+            u = np.load(tmp / "solution.npz")["u"]
         return (answer, u), (float(answer["solve_s"]), float(answer.get("solve_cpu_s", answer["solve_s"])))
 
     return call
-
-
-def converged(result) -> bool:
-    """Whether a ``driver_call`` result is a converged answer (else the protocol stops repeating)."""
-    answer, u = result
-    return u is not None and bool(answer.get("converged"))
 
 
 def run_peer(
@@ -162,11 +147,11 @@ def run_peer(
     ``boundary``).  Never raises."""
     from signorini.timing import CallFailed
 
-    if not route.available:
-        return Attempt(None, "skipped", route.reason, [])
+    if not route.probe.get("petsc4py"):
+        return Attempt(None, "skipped", str(route.probe.get("error", "")), [])
     call = driver_call(config, route, tol, time_limit_s, initial_guess)
-    try:
-        measured = timer.measure(call, kernel, accept=converged)
+    try:  # an answer that did not converge is not repeated
+        measured = timer.measure(call, kernel, accept=lambda r: r[1] is not None and bool(r[0].get("converged")))
     except CallFailed as err:  # OSError starting the interpreter, a corrupt answer file, ...
         return Attempt(None, "failed", f"{type(err.error).__name__}: {err.error}"[:300], [err.elapsed])
     answer, u = measured.result
@@ -180,7 +165,11 @@ def run_peer(
 
 
 def outcome(config: SolverConfig, disc, tol: float | None, answer: dict, u) -> Attempt:
-    """Status, certificate and record fields of a driver's answer."""
+    """Status, certificate and record fields of a driver's answer: a ``SolveResult`` of its ``u``
+    with the multiplier ``(Au − b)_B``, the contact set ``{i ∈ B: u_i ≤ 0}`` and the KKT certificate."""
+    from signorini.solvers.certificate import kkt_certificate
+    from signorini.solvers.result import SolveResult
+
     extra = {
         "setup_s": float(answer["setup_s"]) if "setup_s" in answer else float("nan"),
         "converged_reason": str(answer.get("converged_reason", "")),
@@ -192,7 +181,11 @@ def outcome(config: SolverConfig, disc, tol: float | None, answer: dict, u) -> A
     if answer.get("status") != "done":
         return Attempt(None, "failed", str(answer.get("reason", answer.get("status"))), [], extra)
     required = DEFAULT_TOL if tol is None else float(tol)
-    result = peer_result(config.name, disc.A, disc.b, disc.boundary, u, required, answer)
+    A, b, B, solve_s = disc.A, disc.b, disc.boundary, float(answer["solve_s"])
+    lam = (A @ u - b)[B]
+    info = {"solve_time_s": solve_s, "setup_s": float(answer["setup_s"])}
+    certificate = kkt_certificate(A, b, B, u, lam, required)
+    result = SolveResult(u, lam, B[u[B] <= 0.0], int(answer["iterations"]), solve_s, certificate, config.name, info)
     times = [float(t) for t in answer.get("solve_cpu_times", answer["solve_times"])]
     extra["kkt_required"] = required
     if not answer["converged"]:
@@ -211,23 +204,3 @@ def peer_info(answer: Mapping) -> str:
     inner = eff.get("factor_solver_type") or eff.get("hypre_type")
     kinds = f" ksp={eff.get('ksp_type')} pc={pc}{'/' + inner if inner else ''}" if pc else ""
     return f"PETSc {answer['petsc_version']}: {eff.get('type', '')}{kinds}"
-
-
-def peer_result(name: str, A, b: np.ndarray, boundary: np.ndarray, u: np.ndarray, tol: float, answer: dict):
-    """A ``SolveResult`` of a peer's ``u``: multiplier ``(Au − b)_B``, contact set ``{i ∈ B: u_i ≤ 0}``
-    and the KKT certificate at ``tol``."""
-    from signorini.solvers.certificate import kkt_certificate
-    from signorini.solvers.result import SolveResult
-
-    lam = (A @ u - b)[boundary]
-    certificate = kkt_certificate(A, b, boundary, u, lam, tol)
-    return SolveResult(
-        u=u,
-        lam=lam,
-        active=boundary[u[boundary] <= 0.0],
-        iterations=int(answer["iterations"]),
-        wall_time_s=float(answer["solve_s"]),
-        certificate=certificate,
-        solver=name,
-        info={"solve_time_s": float(answer["solve_s"]), "setup_s": float(answer["setup_s"])},
-    )

@@ -21,7 +21,9 @@ from signorini.formatting import fmt_rel, fmt_time, h_label, md_table, sci_md
 from signorini.pipeline.jobenv import THREAD_VARIABLES
 from signorini.published import TABLE1_NORMS, label_md
 from signorini.studies.work_precision import uncertainty as unc
-from signorini.studies.work_precision.study import REPORT_TEMPLATE
+from signorini.studies.work_precision.findings import COST_NORMS, findings
+from signorini.studies.work_precision.selection import swept
+from signorini.studies.work_precision.study import EXACT_LABEL, REPORT_TEMPLATE, tolerance_key
 from signorini.timing import Protocol
 
 if TYPE_CHECKING:
@@ -45,16 +47,13 @@ def prose(section: str, /, **fields: object) -> str:
     return _sections()[section].format(**fields)
 
 
-def _num(x: float) -> str:
-    return fmt_time(x).removesuffix(" s")
-
-
 def fmt_timed(t: Mapping) -> str:
     """A time with its interval: ``1.6 s (1.3–1.8)``, ``12.4 s (1 sample)``, ``—``."""
     if not math.isfinite(t["value"]):
         return "—"
     if t["interval"]:
-        return f"{fmt_time(t['value'])} ({_num(t['lo'])}–{_num(t['hi'])})"
+        lo, hi = (fmt_time(t[k]).removesuffix(" s") for k in ("lo", "hi"))
+        return f"{fmt_time(t['value'])} ({lo}–{hi})"
     return f"{fmt_time(t['value'])} (1 sample)" if t.get("samples") == 1 else fmt_time(t["value"])
 
 
@@ -87,25 +86,35 @@ def fmt_fit(p: Mapping) -> str:
     return f"{_signed(p['value'])} ({_signed(p['lo'])}{dash}{_signed(p['hi'])})"
 
 
-def _swept(runs: Sequence[Run]) -> list[str]:
-    return sorted({r.tol_label for r in runs if r.tol_label not in ("default", "exact")}, key=float, reverse=True)
+def _table(section: str, header: Sequence[str], rows: Sequence[Sequence[str]], align: str = "r", **fields) -> list:
+    """The template's ``section`` above a Markdown table."""
+    return ["", prose(section, **fields), "", md_table(header, rows, align)]
+
+
+def _name(entry: Mapping, labels: Mapping[str, str]) -> str:
+    """A selected run by its configuration's label and its tolerance: ``OSQP (1e-06)``."""
+    return f"{labels[entry['config']]} ({entry['tol_label']})"
+
+
+def _swept(runs: Sequence[Run]) -> str:
+    """The swept tolerances, loosest first."""
+    return ", ".join(swept([r.tol_label for r in runs if r.tol_label != EXACT_LABEL]))
+
+
+def _meshes(found: Mapping) -> str:
+    return ", ".join(str(N) for N in found["N"])
+
+
+def _counts(counts: Mapping[str, int]) -> str:
+    """Counts by status: ``failed 2, ok 10``."""
+    return ", ".join(f"{k} {n}" for k, n in sorted(counts.items()))
 
 
 def _protocol_text(found: Mapping, protocol: Protocol) -> str:
     p = found["protocol"]
-    stops = p["stops"]
-    numbers = {
-        "stop_spread": stops["spread"],
-        "stop_budget": stops["budget"],
-        "stop_cap": stops["max_repeats"],
-        "stop_rejected": stops["answer rejected"],
-        "few": sum(n for k, n in p["samples"].items() if k < protocol.min_repeats),
-        "single": p["samples"].get(1, 0),
-        "short_time": fmt_time(p["short_s"]),
-    }
     limit = "the cores" if protocol.max_load is None else f"{protocol.max_load:g}"
-    settings = {**protocol.as_dict(), "max_load": limit}
-    text = [prose("protocol", **p, **numbers, **settings), prose("protocol_cpu", **p, **settings)]
+    settings = {**protocol.as_dict(), "max_load": limit, "short_time": fmt_time(p["short_s"])}
+    text = [prose("protocol", **p, **settings), prose("protocol_cpu", **p, **settings)]
     if math.isfinite(p["kernel_spread"]):
         text.append(prose("kernel_spread", kernel_spread=p["kernel_spread"]))
     return " ".join(text)
@@ -141,17 +150,9 @@ def _machine_text(found: Mapping) -> str:
 
 
 def _setup(runs: Sequence[Run], found: Mapping, source: str, protocol: Protocol) -> list[str]:
-    lines = [
-        prose(
-            "setup",
-            meshes=", ".join(str(N) for N in found["N"]),
-            source=source,
-            solvers=", ".join(dict.fromkeys(r.label for r in runs)),
-            tolerances=", ".join(_swept(runs)),
-            counts=", ".join(f"{k} {v}" for k, v in sorted(found["counts"].items())),
-        ),
-        _machine_text(found),
-    ]
+    solvers = ", ".join(dict.fromkeys(r.label for r in runs))
+    numbers = {"meshes": _meshes(found), "tolerances": _swept(runs), "counts": _counts(found["counts"])}
+    lines = [prose("setup", source=source, solvers=solvers, **numbers), _machine_text(found)]
     if found["load"]:
         lines.append(prose("load", **found["load"]))
     lines.append(_protocol_text(found, protocol))
@@ -164,51 +165,40 @@ def _setup(runs: Sequence[Run], found: Mapping, source: str, protocol: Protocol)
 
 def _rules(runs: Sequence[Run], found: Mapping) -> list[str]:
     """The selection rule and the intervals, stated once."""
-    meshes = ", ".join(str(N) for N in found["N"])
-    numbers = {"n_norms": len(found["table1_norms"]), "n_meshes": len(found["N"]), "meshes": meshes}
+    numbers = {"n_norms": len(found["table1_norms"]), "n_meshes": len(found["N"]), "meshes": _meshes(found)}
     intervals = {"level": unc.LEVEL, "resamples": unc.RESAMPLES, "seed": unc.SEED}
-    return ["", prose("rules", tolerances=", ".join(_swept(runs)), **numbers, **intervals)]
+    return ["", prose("rules", tolerances=_swept(runs), **numbers, **intervals)]
 
 
 def _eoc_brief(found: Mapping) -> list[str]:
+    """Whether a run at one fixed tolerance reproduces the published irregular EOCs markedly better
+    than the exact solution (``MARKEDLY``), and how many scatter them (``SCATTERS``)."""
     eocs, paper_rates = list(found["eoc"]), found["paper_l4_eoc"]
-    exact = next((e for e in eocs if e["tol_label"] == "exact"), None)
-    inexact = [e for e in eocs if e["tol_label"] != "exact" and math.isfinite(e["max_dev_paper"])]
+    exact = next((e for e in eocs if e["tol_label"] == EXACT_LABEL), None)
+    inexact = [e for e in eocs if e["tol_label"] != EXACT_LABEL and math.isfinite(e["max_dev_paper"])]
     if not (paper_rates and exact is not None and inexact):
         return []
     best = min(inexact, key=lambda e: e["max_dev_paper"])
+    dev, best_dev = exact["max_dev_paper"], best["max_dev_paper"]
 
     def fmt(rates: Sequence[float]) -> str:
         return ", ".join(f"{r:.4f}" for r in rates)
 
-    line = prose(
-        "eoc",
-        paper=fmt(paper_rates),
-        exact=fmt(exact["eoc"]),
-        exact_dev=exact["max_dev_paper"],
-        label=best["label"],
-        tol=best["tol_label"],
-        best=fmt(best["eoc"]),
-        best_dev=best["max_dev_paper"],
-    )
-    if best["max_dev_paper"] < MARKEDLY * exact["max_dev_paper"]:
-        verdict = prose("eoc_close", label=best["label"], tol=best["tol_label"], markedly=MARKEDLY)
+    line = prose("eoc", paper=fmt(paper_rates), exact_eoc=fmt(exact["eoc"]), best_eoc=fmt(best["eoc"]), exact=exact,
+                 best=best)
+    if best_dev < MARKEDLY * dev:
+        verdict = prose("eoc_close", best=best, markedly=MARKEDLY)
     else:
-        verdict = prose(
-            "eoc_far",
-            closer=sum(e["max_dev_paper"] < exact["max_dev_paper"] for e in inexact),
-            inexact=len(inexact),
-            gain=max(exact["max_dev_paper"] - best["max_dev_paper"], 0.0),
-            wild=sum(e["max_dev_paper"] > SCATTERS * exact["max_dev_paper"] for e in inexact),
-            markedly=MARKEDLY,
-            scatters=SCATTERS,
-        )
+        closer = sum(e["max_dev_paper"] < dev for e in inexact)
+        wild = sum(e["max_dev_paper"] > SCATTERS * dev for e in inexact)
+        verdict = prose("eoc_far", closer=closer, inexact=len(inexact), gain=max(dev - best_dev, 0.0), wild=wild,
+                        markedly=MARKEDLY, scatters=SCATTERS)
     return [line, f"  {verdict}"]
 
 
 def _needed_brief(found: Mapping, labels: Mapping[str, str]) -> str:
-    has = [f"{labels.get(c, c)} {tol}" for c, tol in found["needed"].items() if tol]
-    none = [labels.get(c, c) for c, tol in found["needed"].items() if not tol]
+    has = [f"{labels[c]} {tol}" for c, tol in found["needed"].items() if tol]
+    none = [labels[c] for c, tol in found["needed"].items() if not tol]
     parts = ["; ".join(has) if has else prose("needed_none")]
     if none and has:
         parts.append(prose("needed_without", configs=", ".join(none)))
@@ -220,8 +210,8 @@ def _fastest_brief(found: Mapping, labels: Mapping[str, str]) -> list[str]:
     if not found["fastest"]:
         return []
     first, *rest = found["fastest"]
-    tied = [labels.get(r["config"], r["config"]) for r in rest if r["vs_fastest"]["verdict"] == "tie"]
-    open_ = [labels.get(r["config"], r["config"]) for r in rest if r["vs_fastest"]["verdict"] == "undetermined"]
+    tied = [labels[r["config"]] for r in rest if r["vs_fastest"]["verdict"] == "tie"]
+    open_ = [labels[r["config"]] for r in rest if r["vs_fastest"]["verdict"] == "undetermined"]
     if tied:
         verdict = prose("fastest_tied", configs=", ".join(tied))
     elif rest and not open_:
@@ -230,12 +220,8 @@ def _fastest_brief(found: Mapping, labels: Mapping[str, str]) -> list[str]:
         verdict = prose("fastest_untied") if rest else prose("fastest_alone")
     if open_:
         verdict += prose("fastest_open", configs=", ".join(open_))
-    name, tol, time = labels.get(first["config"], first["config"]), first["tol_label"], fmt_timed(first)
-    line = prose("fastest", N=found["N"][-1], name=name, tol=tol, time=time, verdict=verdict)
-    others = "; ".join(
-        f"{labels.get(r['config'], r['config'])} ({r['tol_label']}) {fmt_timed(r)} {fmt_ratio(r['vs_fastest'])}"
-        for r in rest
-    )
+    line = prose("fastest", N=found["N"][-1], name=_name(first, labels), time=fmt_timed(first), verdict=verdict)
+    others = "; ".join(f"{_name(r, labels)} {fmt_timed(r)} {fmt_ratio(r['vs_fastest'])}" for r in rest)
     return [line + (" " + prose("fastest_others", others=others) if others else "")]
 
 
@@ -245,11 +231,10 @@ def _fair_brief(found: Mapping, labels: Mapping[str, str]) -> list[str]:
         if not rows:
             continue
         runs = "; ".join(
-            f"N = {r['N']}: {labels.get(r['other']['config'], r['other']['config'])} ({r['other']['tol_label']}) "
-            f"{fmt_ratio(r['ratio'])} against {labels.get(r['ours']['config'], r['ours']['config'])}"
+            f"N = {r['N']}: {_name(r['other'], labels)} {fmt_ratio(r['ratio'])} against {labels[r['ours']['config']]}"
             for r in rows
         )
-        by = {}
+        by: dict[str, list[str]] = {}
         for r in rows:
             by.setdefault(r["ratio"]["verdict"], []).append(str(r["N"]))
         verdict = "; ".join(f"{VERDICTS[v]} at N = {', '.join(Ns)}" for v, Ns in sorted(by.items()))
@@ -261,7 +246,7 @@ def _fair_brief(found: Mapping, labels: Mapping[str, str]) -> list[str]:
 def _cost_brief(exact: Mapping) -> list[str]:
     """The slopes of the exact solver's total errors against its total time, and per norm the cost of
     one more digit when the error falls (the slope and its whole interval below 0)."""
-    names = {"L4": "L⁴", "W14": "W^{1,4}"}
+    names = dict(zip(COST_NORMS, ("L⁴", "W^{1,4}"), strict=True))
     if any(f"slope_{n}" not in exact for n in names):
         return []
     fits = " and ".join(f"{fmt_fit(exact[f'slope_{n}'])} in {name}" for n, name in names.items())
@@ -278,7 +263,7 @@ def _cost_brief(exact: Mapping) -> list[str]:
 
 def _brief(found: Mapping, labels: Mapping[str, str]) -> list[str]:
     lines = [_needed_brief(found, labels), *_fastest_brief(found, labels), *_fair_brief(found, labels)]
-    fits = [f"{labels.get(c, c)} p = {fmt_fit(p)}" for c, p in found["scaling"].items()]
+    fits = [f"{labels[c]} p = {fmt_fit(p)}" for c, p in found["scaling"].items()]
     if fits:
         lines.append(prose("scaling", fits="; ".join(fits)))
     lines += _eoc_brief(found)
@@ -293,65 +278,50 @@ def _brief(found: Mapping, labels: Mapping[str, str]) -> list[str]:
 
 def _fair_table(found: Mapping, labels: Mapping[str, str]) -> list[str]:
     """Both comparisons side by side, one row per mesh."""
-    fair = {k: v for k, v in found["fair"].items() if v}
+    fair = {k: {r["N"]: r for r in rows} for k, rows in found["fair"].items() if rows}
     if not fair:
         return []
-    header, cols = ["N"], []
-    for key in ("same_warm_start", "cold_against_cold"):
-        if key in fair:
-            name = "same warm start" if key == "same_warm_start" else "cold against cold"
-            header += [f"{name}: ours", "its time", "fastest other (tolerance)", "its time", "other / ours"]
-            cols.append({r["N"]: r for r in fair[key]})
+    header = ["N"]
+    for key in fair:  # same_warm_start, cold_against_cold
+        header += [f"{key.replace('_', ' ')}: ours", "its time", "fastest other (tolerance)", "its time"]
+        header.append("other / ours")
 
     def cells(r: Mapping | None) -> list[str]:
         if r is None:
             return ["—"] * 5
         ours, other = r["ours"], r["other"]
-        name = f"{labels.get(other['config'], other['config'])} ({other['tol_label']})"
-        mine = labels.get(ours["config"], ours["config"])
-        return [mine, fmt_timed(ours), name, fmt_timed(other), fmt_ratio(r["ratio"])]
+        return [labels[ours["config"]], fmt_timed(ours), _name(other, labels), fmt_timed(other), fmt_ratio(r["ratio"])]
 
-    rows = [[str(N), *(c for col in cols for c in cells(col.get(N)))] for N in found["N"]]
-    return ["", prose("fair_table"), "", md_table(header, rows)]
+    rows = [[str(N), *(c for by in fair.values() for c in cells(by.get(N)))] for N in found["N"]]
+    return _table("fair_table", header, rows)
 
 
 def _peer_table(found: Mapping) -> list[str]:
     if not found["peers"]:
         return []
     rows = [
-        [
-            v["label"],
-            found["tolerance"].get(config) or "none",
-            ", ".join(f"{k} {n}" for k, n in sorted(v["statuses"].items())),
-            ", ".join(v["reasons"]) or "—",
-        ]
+        [v["label"], found["tolerance"].get(config) or "none", _counts(v["statuses"]), ", ".join(v["reasons"]) or "—"]
         for config, v in found["peers"].items()
     ]
     header = ["PETSc method", "selected tolerance", "statuses of all runs", "PETSc reasons"]
     version = ", ".join(v.removeprefix("PETSc ") for v in found["software"]["petsc"])
-    return ["", prose("peers", version=version), "", md_table(header, rows, align="l")]
+    return _table("peers", header, rows, "l", version=version)
 
 
 def _table1_digits(found: Mapping) -> list[str]:
-    Ns, last = list(found["N"]), found["N"][-1]
+    n, last = len(found["N"]), found["N"][-1]
+
+    def row(c: Mapping) -> list[str]:
+        changed = f"{c['changed']}/{c['n_cells']}" + ("" if c["answered"] else " (partial)")
+        statuses = " ".join(s if s != "inaccurate" else "inacc." for s in c["statuses"])
+        keeping = f"{c['keeping']}/{n}" + (" selected" if c["selected"] else "")
+        rel, time, alg = fmt_rel(c["worst_rel_change"]), fmt_timed(c["time_last"]), fmt_rel(c["alg_L4_rel_last"])
+        return [c["label"], c["tol_label"], changed, rel, statuses, keeping, time, alg]
+
     header = ["solver", "tolerance", "cells changed", "worst rel. change", "status per N", "keeps digits"]
     header += [f"time N={last}", f"alg./disc. L⁴ N={last}"]
-    rows = [
-        [
-            c["label"],
-            c["tol_label"],
-            f"{c['changed']}/{c['n_cells']}" + ("" if c["answered"] else " (partial)"),
-            fmt_rel(c["worst_rel_change"]),
-            " ".join(s if s != "inaccurate" else "inacc." for s in c["statuses"]),
-            f"{c['keeping']}/{len(Ns)}" + (" selected" if c["selected"] else ""),
-            fmt_timed(c["time_last"]),
-            fmt_rel(c["alg_L4_rel_last"]),
-        ]
-        for c in found["cells"]
-    ]
-    meshes = ", ".join(str(N) for N in Ns)
-    intro = prose("digits", n_norms=len(found["table1_norms"]), n_meshes=len(Ns), meshes=meshes, last=last)
-    return ["", intro, "", md_table(header, rows)]
+    numbers = {"n_norms": len(found["table1_norms"]), "n_meshes": n, "meshes": _meshes(found), "last": last}
+    return _table("digits", header, [row(c) for c in found["cells"]], **numbers)
 
 
 def _time_to_digits(found: Mapping, labels: Mapping[str, str]) -> list[str]:
@@ -359,52 +329,39 @@ def _time_to_digits(found: Mapping, labels: Mapping[str, str]) -> list[str]:
     rows = []
     for config, tol in found["tolerance"].items():
         cells = [fmt_timed(selected[N][config]) if tol else "—" for N in Ns]
-        rows.append([labels.get(config, config), tol or "none", *cells, fmt_fit(scaling[config]) if tol else "—"])
-    header = ["solver", "selected tolerance", *(f"N = {N}" for N in Ns), "p"]
-    return ["", prose("time_to_digits"), "", md_table(header, rows)]
+        rows.append([labels[config], tol or "none", *cells, fmt_fit(scaling[config]) if tol else "—"])
+    return _table("time_to_digits", ["solver", "selected tolerance", *(f"N = {N}" for N in Ns), "p"], rows)
 
 
 def _eoc_table(found: Mapping) -> list[str]:
-    eocs, Ns, paper_rates = list(found["eoc"]), list(found["N"]), found["paper_l4_eoc"]
+    eocs, paper_rates = list(found["eoc"]), found["paper_l4_eoc"]
     if not eocs:
         return []
-    header = ["solver", "tolerance", *(h_label(N) for N in Ns[1:]), "max Δ paper", "max Δ exact", "L⁴ vs Table 1"]
+
+    def fixed(x: float) -> str:
+        return f"{x:.4f}" if math.isfinite(x) else "—"
+
     rows = []
     if paper_rates and any(math.isfinite(r) for r in paper_rates):
         rows.append(["paper (Table 2)", "", *(f"{r:.4f}" for r in paper_rates), "", "", ""])
     for e in eocs:
         dev = [abs(x) for x in e.get("l4_dev_paper", []) if math.isfinite(x)]
-        rows.append(
-            [
-                e["label"],
-                e["tol_label"],
-                *(f"{r:.4f}" for r in e["eoc"]),
-                f"{e['max_dev_paper']:.4f}" if math.isfinite(e["max_dev_paper"]) else "—",
-                f"{e['max_dev_exact']:.4f}" if math.isfinite(e["max_dev_exact"]) else "—",
-                f"{100 * max(dev):.2f} %" if dev else "—",
-            ]
-        )
-    return ["", prose("eoc_table"), "", md_table(header, rows)]
+        rates = [f"{r:.4f}" for r in e["eoc"]]
+        l4 = f"{100 * max(dev):.2f} %" if dev else "—"
+        rows.append([e["label"], e["tol_label"], *rates, fixed(e["max_dev_paper"]), fixed(e["max_dev_exact"]), l4])
+    header = ["solver", "tolerance", *(h_label(N) for N in found["N"][1:]), "max Δ paper", "max Δ exact"]
+    return _table("eoc_table", [*header, "L⁴ vs Table 1"], rows)
 
 
 def _cost_table(found: Mapping) -> list[str]:
     exact = found["exact"]
     if not exact:
         return []
-    nan = [math.nan] * len(exact["N"])
-    rows = [
-        [
-            h_label(N),
-            fmt_time(exact["build_s"][k]),
-            fmt_timed(exact["time"][k]),
-            fmt_timed(exact["total_time"][k]),
-            sci_md(exact.get("total_L4", nan)[k]),
-            sci_md(exact.get("total_W14", nan)[k]),
-        ]
-        for k, N in enumerate(exact["N"])
-    ]
-    header = ["h", "assembly", "solve", "total", label_md("L4"), label_md("W14")]
-    return ["", prose("cost_table", label=exact["label"]), "", md_table(header, rows)]
+    errors = [exact.get(f"total_{n}", [math.nan] * len(exact["N"])) for n in COST_NORMS]
+    columns = zip(exact["N"], exact["build_s"], exact["time"], exact["total_time"], *errors, strict=True)
+    rows = [[h_label(N), fmt_time(b), fmt_timed(t), fmt_timed(s), *map(sci_md, e)] for N, b, t, s, *e in columns]
+    header = ["h", "assembly", "solve", "total", *(label_md(n) for n in COST_NORMS)]
+    return _table("cost_table", header, rows, label=exact["label"])
 
 
 def _failure_rows(bad: Sequence[Run]) -> list[list[str]]:
@@ -420,8 +377,7 @@ def _failure_rows(bad: Sequence[Run]) -> list[list[str]]:
     rows = []
     for key, runs in groups.items():
         label, status, reason = key
-        tols = list(dict.fromkeys(t for _, t in runs))
-        tols.sort(key=lambda t: (t != "default", -float(t) if t not in ("default", "exact") else 0.0))
+        tols = sorted(dict.fromkeys(t for _, t in runs), key=tolerance_key)
         if key in worst:
             where = "; ".join(f"{t} at {', '.join(str(N) for N, u in runs if u == t)}" for t in tols)
             reason = f"{reason} (up to ×{worst[key]:.1f})"
@@ -456,7 +412,6 @@ def report_stage(
     paper_table1: str | os.PathLike,
     paper_table2: str | os.PathLike,
     out_md: str | os.PathLike,
-    table1_norms: Sequence[str] | None = None,
     source: str = "paper",
     timing: Mapping | None = None,
 ) -> dict:
@@ -465,12 +420,11 @@ def report_stage(
     ``timing`` block (the protocol of its measurements)."""
     from signorini.pipeline.artifacts import atomic_write_text
     from signorini.studies.paper.reference import by_mesh, read_table_csv
-    from signorini.studies.work_precision.findings import findings
     from signorini.studies.work_precision.table import read_runs
 
     runs = read_runs(csv_path)
     p1, p2 = read_table_csv(paper_table1), read_table_csv(paper_table2)
     protocol = Protocol.from_mapping(timing)
-    found = findings(runs, table1_norms or TABLE1_NORMS, by_mesh(p1, "L4"), by_mesh(p2, "L4"), protocol)
+    found = findings(runs, TABLE1_NORMS, by_mesh(p1, "L4"), by_mesh(p2, "L4"), protocol)
     atomic_write_text(out_md, work_precision_md(runs, found, source, protocol))
     return found

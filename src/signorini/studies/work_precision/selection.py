@@ -22,12 +22,16 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from signorini.formatting import sci_md
-from signorini.studies.work_precision.study import EXACT_LABEL
+from signorini.published import TABLE1_NORMS
+from signorini.studies.work_precision.study import DEFAULT_LABEL, tolerance_key
 
 if TYPE_CHECKING:
     from signorini.studies.work_precision.table import Run
 
-DEFAULT_LABEL = "default"  # the tolerance label of a solver's own default tolerance
+
+def table1_norms_of(runs: Sequence[Run], norms: Sequence[str] | None = None) -> list[str]:
+    """Table 1's norms (``norms``, default the paper's) that the runs have errors in."""
+    return [n for n in (norms or TABLE1_NORMS) if runs and n in runs[0].total]
 
 
 def printed(x: float) -> str:
@@ -51,9 +55,7 @@ def keeps_digits(run: Run, norms: Sequence[str]) -> bool:
 def swept(labels: Sequence[str]) -> list[str]:
     """The tolerance labels a configuration may be selected at, loosest first (``exact``, or the
     swept tolerances; not ``default``)."""
-    rest = [lab for lab in dict.fromkeys(labels) if lab not in (DEFAULT_LABEL, EXACT_LABEL)]
-    exact = [EXACT_LABEL] if EXACT_LABEL in labels else []
-    return exact + sorted(rest, key=float, reverse=True)
+    return sorted((lab for lab in dict.fromkeys(labels) if lab != DEFAULT_LABEL), key=tolerance_key)
 
 
 def selected_tolerances(runs: Sequence[Run], norms: Sequence[str]) -> dict[str, str | None]:

@@ -18,6 +18,7 @@ from signorini.studies.work_precision.routes import QP_PREFIX, Kind, Runner
 
 FIGURE_NORMS = FIGURE3_NORMS  # the panel rows of work_precision.{pdf,png}
 EXACT_LABEL = "exact"  # the tolerance label of the exact (active-set) runs
+DEFAULT_LABEL = "default"  # the tolerance label of a solver's own default tolerance
 GROWTH_EXPONENT = 1.5  # predicted time ∝ (number of unknowns)^GROWTH_EXPONENT
 # PETSc peers, run by an external interpreter with petsc4py (studies.work_precision.peers):
 # solver name → the kind of PETSc object the driver builds
@@ -38,6 +39,11 @@ ROUTES: dict[str, Runner] = {
 
 
 INACCURATE = "KKT residual above the tolerance"  # the reason of an answer the certificate does not accept
+
+
+def tolerance_key(label: str) -> tuple[int, float]:
+    """Orders tolerance labels: ``exact`` and ``default`` first, then the swept tolerances loose to tight."""
+    return (0, 0.0) if label in (EXACT_LABEL, DEFAULT_LABEL) else (1, -float(label))
 
 
 def accuracy_status(worst: float, required: float) -> tuple[str, str]:
@@ -118,8 +124,8 @@ class SolverConfig:
     @property
     def initial(self) -> str:
         """Where the solver starts: ``cascade`` (the cascade's interpolated coarse solution) or ``cold``."""
-        if self.exact:
-            return "cold" if "warm_start" in self.options and self.options["warm_start"] is None else "cascade"
+        if self.exact:  # warm_start: null is the cold start
+            return "cold" if self.options.get("warm_start", "cascade") is None else "cascade"
         return self.start
 
     @property

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field, fields
 
 from signorini.pipeline.artifacts import CorruptArtifactError, atomic_write_csv, load_json
 from signorini.studies.work_precision.routes import Kind
-from signorini.studies.work_precision.study import EXACT_LABEL, kind_of, table_route
+from signorini.studies.work_precision.study import kind_of, table_route, tolerance_key
 
 NAN = math.nan
 ERRORS = ("alg", "total", "disc")  # the errors by norm: columns alg_<norm>, total_<norm>, disc_<norm>
@@ -139,14 +139,11 @@ def read_runs(path: str | os.PathLike) -> list[Run]:
     return [Run.of(row) for row in frame.to_dict("records")]
 
 
-def tolerance_order(runs: Sequence[Run]) -> list[tuple[str, str]]:
-    """(config, tol_label) pairs in plotting order: configs as they appear, the exact solver's
-    single run, then each QP solver's default followed by its tolerances loose to tight."""
-    labels: dict[str, dict[str, None]] = {}
+def sweeps(runs: Sequence[Run]) -> dict[tuple[str, str], dict[int, Run]]:
+    """Each (config, tol_label)'s runs by N, in plotting order: configs as they appear, each with its
+    exact or default runs first, then its tolerances loose to tight (``study.tolerance_key``)."""
+    out: dict[tuple[str, str], dict[int, Run]] = {}
     for run in runs:
-        labels.setdefault(run.config, {})[run.tol_label] = None
-    out = []
-    for config, mine in labels.items():
-        rest = sorted((lab for lab in mine if lab not in ("default", EXACT_LABEL)), key=float, reverse=True)
-        out += [(config, lab) for lab in mine if lab in ("default", EXACT_LABEL)] + [(config, lab) for lab in rest]
-    return out
+        out.setdefault((run.config, run.tol_label), {})[run.N] = run
+    configs = list(dict.fromkeys(config for config, _ in out))
+    return {key: out[key] for key in sorted(out, key=lambda k: (configs.index(k[0]), tolerance_key(k[1])))}

@@ -30,17 +30,9 @@ RESAMPLES = 2000
 LEVEL = 0.95  # the probability the percentile interval holds
 
 
-def samples(times: object) -> np.ndarray:
+def samples(times: str) -> np.ndarray:
     """The CPU seconds of a run's samples (its ``times`` cell: space-separated; none: empty)."""
-    if not isinstance(times, str):
-        return np.array([], dtype=float)
     return np.array([float(t) for t in times.split()], dtype=float)
-
-
-def _bounds(values: np.ndarray) -> tuple[float, float]:
-    tail = 50.0 * (1.0 - LEVEL)
-    lo, hi = np.percentile(values, [tail, 100.0 - tail])
-    return float(lo), float(hi)
 
 
 @dataclass(frozen=True)
@@ -54,16 +46,16 @@ class Estimate:
     @property
     def interval(self) -> tuple[float, float] | None:
         """The ``LEVEL`` percentile interval of the resamples (None: no spread to resample)."""
-        return _bounds(self.boot) if self.spread else None
+        if not self.spread:
+            return None
+        tail = 50.0 * (1.0 - LEVEL)
+        lo, hi = np.percentile(self.boot, [tail, 100.0 - tail])
+        return float(lo), float(hi)
 
     def summary(self) -> dict:
         """``value``, ``lo``, ``hi`` (NaN without an interval) and ``interval`` (whether there is one)."""
         lo, hi = self.interval or (math.nan, math.nan)
         return {"value": self.value, "lo": lo, "hi": hi, "interval": self.spread}
-
-
-def _seed(key: Sequence[object]) -> list[int]:
-    return [SEED, *(zlib.crc32(str(k).encode("utf-8")) for k in key)]
 
 
 def run_time(run: Run) -> Estimate:
@@ -73,7 +65,8 @@ def run_time(run: Run) -> Estimate:
     t = samples(run.times)
     if t.size < 2:
         return Estimate(value, np.full(RESAMPLES, value), False)
-    rng = np.random.default_rng(_seed((run.N, run.config, run.tol_label)))
+    key = (run.N, run.config, run.tol_label)  # the same resamples whatever else the table holds
+    rng = np.random.default_rng([SEED, *(zlib.crc32(str(k).encode("utf-8")) for k in key)])
     medians = np.median(t[rng.integers(0, t.size, size=(RESAMPLES, t.size))], axis=1)
     return Estimate(value, medians + (value - float(np.median(t))), True)
 
