@@ -43,16 +43,19 @@ def test_build_bundles_a_consistent_discrete_problem():
     assert disc.N == 9 and disc.diagonal == "nw_se" and disc.problem is problem
     np.testing.assert_array_equal(disc.boundary, boundary_nodes(disc.mesh))
     A, b = assemble(friedrichs_keller(9, "nw_se"), problem)
-    assert abs(disc.A - A).max() == 0.0
+    assert abs(disc.A - A).max() <= 1e-14 * abs(A).max()  # the exact stencil (tests/fem/test_assembly.py)
     np.testing.assert_array_equal(disc.b, b)
 
 
 @pytest.mark.parametrize("diagonal", DIAGONALS)
-def test_build_is_the_scikit_fem_assembly_bit_for_bit(diagonal):
+def test_build_is_the_scikit_fem_assembly_without_the_coordinates_round_off(diagonal):
+    """The load vector and the sparsity bit for bit; the matrix's values within the round-off of
+    the mesh's coordinates in scikit-fem's (a few units in the last place per cell per side)."""
     problem = Problem(x0=0.47, c=1.5)
     disc = build(problem, 23, diagonal)
     A, b = assemble(friedrichs_keller(23, diagonal), problem)
-    for part in ("indptr", "indices", "data"):
+    for part in ("indptr", "indices"):
         assert _same_bits(getattr(disc.A, part), getattr(A, part))
+    assert np.all(np.abs(disc.A.data - A.data) <= 4 * 23 * np.spacing(np.abs(A.data)))
     assert _same_bits(disc.b, b)
     assert _same_bits(disc.boundary, boundary_nodes(disc.mesh))

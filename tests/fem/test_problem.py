@@ -459,3 +459,18 @@ def test_the_vanishing_problem_keeps_the_points_and_has_u_zero(rng):
     assert zero.c == 3.0 and not zero.u(x).any() and not zero.grad_u(x).any() and not zero.f(x).any()
     assert zero.singular_points().shape == (2, 0)
     assert not zero.derivative_bounds().hessian_bound(np.array([0.0]), np.array([0.1])).any()
+
+
+def test_outside_its_support_the_problem_is_exactly_positive_zero():
+    """``support``: at every point with r ≥ R, u, ∇u and f are +0.0 (what lets the load vector leave
+    out the triangles outside the disc without changing a bit)."""
+    problem = Problem(x0=0.47, R=0.3, A=7.0, c=2.0)
+    centre, radius = problem.support()
+    rng = np.random.default_rng(5)
+    angle = np.linspace(0, np.pi, 50)
+    ring = centre[:, None] + radius * np.array([np.cos(angle), np.sin(angle)])  # on the circle, up to round-off
+    for points in (rng.uniform(0.0, 1.0, (2, 20000)), ring):
+        points = points[:, np.hypot(points[0] - centre[0], points[1] - centre[1]) >= radius]
+        for values in (problem.f(points), problem.u(points), problem.grad_u(points)):
+            assert np.all(values == 0.0) and not np.signbit(values).any()
+    assert ProblemBase.support(problem) is None  # the default: anywhere

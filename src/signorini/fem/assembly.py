@@ -5,17 +5,18 @@ quadrature convention of the whole package.  Linear (and, on request, bilinear)
 forms are assembled over consecutive chunks of triangles, so that the quadrature
 data of a mesh with millions of triangles never exists for the whole mesh at once.
 
-Two routes give the same arrays, bit for bit (tests/fem/test_assembly.py):
+Two routes give the system:
 
 - scikit-fem's forms (``system_matrix``, ``assemble``) on any P1 mesh: per-element
   COO triplets, summed by scipy (``9 · #T`` triplets at once);
-- on a Friedrichs–Keller mesh, ``fk_system_matrix`` writes the 7-point stencil of every
-  vertex directly into CSR arrays, band by band of grid lines: the element matrices are
-  computed with scikit-fem's floating-point operations (``_local_matrices``) and each
-  entry is summed in the order scipy sums the triplets (``_row_templates``), so the
-  memory is that of the result plus one band.  ``load_vector`` evaluates ``f`` once per
-  quadrature point of a chunk (scikit-fem's ``LinearForm`` evaluates it once per basis
-  function) with the same operations and the same order of summation.
+- on an unjittered Friedrichs–Keller mesh, ``fk_stencil_matrix`` writes the 7-point stencil of
+  every vertex directly into CSR arrays, band by band of grid lines: every triangle is a right
+  triangle of legs ``h``, so each class of vertex (corner, edge, interior) has one stencil, exact
+  up to one rounding of the mass term (scikit-fem's entries carry the round-off of the mesh's
+  coordinates, up to about ``N`` units in the last place); the sparsity and index types are
+  scikit-fem's.  ``load_vector`` evaluates ``f`` once per quadrature point of a chunk
+  (scikit-fem's ``LinearForm`` evaluates it once per basis function) with the same operations and
+  the same order of summation, bit for bit, and leaves out the triangles outside the support of ``f``.
 """
 
 from __future__ import annotations
@@ -177,47 +178,15 @@ def _quadrature_measure(det: np.ndarray, W: np.ndarray) -> np.ndarray:
     return np.abs(np.tile(det, (q, 1)).T) * np.broadcast_to(W, (det.shape[0], q))
 
 
-def _local_matrices(p: np.ndarray, t: np.ndarray, c: float, intorder: int = 2) -> np.ndarray:
-    """``data[j, i, e] = ∫_{T_e} ∇φ_j·∇φ_i + c φ_j φ_i`` (3, 3, E), computed with the operations of
-    scikit-fem's ``_reaction_diffusion`` kernel on a degree-``intorder`` basis (bit-identical)."""
-    X, W = get_quadrature(RefTri, intorder)
-    q, nt = X.shape[1], t.shape[1]
-    _, _, det, inv = _affine_maps(p, t)
-    invDF = np.einsum("ijk,l->ijkl", inv, np.ones(q))
-    zero = 0.0 * X[0]
-    dphi = (np.array([-1.0 + zero, -1.0 + zero]), np.array([1.0 + zero, zero]), np.array([zero, 1.0 + zero]))
-    grads = [np.einsum("ijkl,il->jkl", invDF, d) for d in dphi]
-    values = [np.broadcast_to(v, (nt, q)) for v in p1_values(X)]
-    dx = _quadrature_measure(det, W)
-    data = np.empty((3, 3, nt))
-    for j in range(3):
-        for i in range(3):
-            form = np.einsum("i...,i...", grads[j], grads[i]) + c * values[j] * values[i]
-            data[j, i] = np.sum(form * dx, axis=1)
-    return data
-
-
 # --- the Friedrichs–Keller stencil ------------------------------------------------------------
 #
 # Vertex (a, b) of a Friedrichs–Keller mesh (``fem.mesh``) has index a (N + 1) + b; its row of A
-# has one entry per neighbour (a + da, b + db), |da|, |db| ≤ 1 (7 of the 9 for either diagonal).
-# scipy sums the triplets of one row in the order of its row sort (``csr_sort_indices``, an
-# unstable sort for rows of more than 16 triplets), and that order depends only on the sequence
-# of column keys: one sequence per vertex class (corner, edge, interior), the same everywhere
-# else by translation.  ``_row_templates`` finds each class's triplet sequence on the mesh, and
-# ``_sort_order`` asks scipy itself for the order in which it sums a sequence of keys.
+# has one entry per neighbour (a + da, b + db), |da|, |db| ≤ 1 (7 of the 9 for either diagonal),
+# and the same entries as every vertex of its class (corner, edge, interior): ``_row_templates``
+# finds each class's element contributions on the mesh.
 
 # grid lines of vertices per band: bounds the working memory (docs/evidence/design-measurements.md#chunk-sizes)
 STENCIL_BAND = 64
-
-
-def _sort_order(keys: tuple[int, ...]) -> np.ndarray:
-    """The permutation scipy's CSR row sort applies to a row whose column keys are ``keys``."""
-    k = np.asarray(keys, dtype=np.int32)
-    probe = sp.csr_matrix((np.arange(k.size, dtype=float), k, np.array([0, k.size])), shape=(1, 9))
-    probe.has_sorted_indices = False  # force the sort scipy's COO-to-CSR conversion performs
-    probe.sort_indices()
-    return probe.data.astype(np.intp)
 
 
 def _vertex_class(k: np.ndarray, N: int) -> np.ndarray:
@@ -226,12 +195,14 @@ def _vertex_class(k: np.ndarray, N: int) -> np.ndarray:
 
 
 def _row_templates(mesh: MeshTri, N: int) -> dict[tuple[int, int], list[tuple[int, ...]]]:
-    """Per vertex class (class of a, class of b): the triplets of a row of A in scipy's COO order
-    (local column j, local row i, element), each as ``(j, i, type, di, dj, key)``: the element of
-    type 0 (first N² triangles) or 1 on the cell (a + di, b + dj), the column key 3 (da + 1) + db + 1."""
+    """Per vertex class (class of a, class of b): the element contributions to a row of A, each as
+    ``(j, i, type, di, dj, key)``: entry (i, j) of the element matrix of the element of type 0
+    (first N² triangles) or 1 on the cell (a + di, b + dj), whose local vertex i is the row's vertex
+    and j its neighbour with the column key 3 (da + 1) + db + 1."""
     templates = {}
-    for ca in sorted({int(c) for c in _vertex_class(np.arange(N + 1), N)}):
-        for cb in sorted({int(c) for c in _vertex_class(np.arange(N + 1), N)}):
+    classes = sorted({int(c) for c in _vertex_class(np.arange(N + 1), N)})
+    for ca in classes:
+        for cb in classes:
             a, b = (0, 1, N)[ca], (0, 1, N)[cb]
             r, rows = a * (N + 1) + b, []
             for di, dj in ((-1, -1), (-1, 0), (0, -1), (0, 0)):
@@ -242,74 +213,61 @@ def _row_templates(mesh: MeshTri, N: int) -> dict[tuple[int, int], list[tuple[in
                     for i in np.flatnonzero(mesh.t[:, e] == r):
                         for j in range(3):
                             da, db = np.divmod(int(mesh.t[j, e]), N + 1)
-                            rows.append((j, int(i), e, kind, di, dj, 3 * (int(da) - a + 1) + int(db) - b + 1))
-            rows.sort(key=lambda row: row[:3])
-            templates[(ca, cb)] = [row[:2] + row[3:] for row in rows]
+                            rows.append((j, int(i), kind, di, dj, 3 * (int(da) - a + 1) + int(db) - b + 1))
+            templates[(ca, cb)] = rows
     return templates
 
 
-def _band_rows(template, data, a, b, c0):
-    """The triplet values (nodes, len(template)) of the rows of vertices (a, b) (element matrices
-    ``data[kind]`` (3, 3, cells, N) of the cell rows from ``c0``)."""
-    return np.stack([data[kind][j, i, a + di - c0, b + dj] for j, i, kind, di, dj, _ in template], axis=1)
+def _class_stencils(mesh: MeshTri, N: int, c: float) -> tuple[np.ndarray, np.ndarray]:
+    """Per vertex class ``3 ca + cb`` (``_vertex_class``): the 9 entries of its row of ``A`` on the
+    unjittered mesh, in exact form, and which of them exist.  On the grid of spacing ``h`` every
+    triangle is a right triangle of legs ``h``: its stiffness matrix is ``e_i·e_j / 2`` for the edges
+    ``e_i`` opposite its vertices in grid units (integers), its mass matrix ``h² (1 + δ_ij) / 24``.
+    A triplet that is zero is dropped, as scipy's ``eliminate_zeros`` drops it (``c = 0``: the
+    stiffness between the acute vertices)."""
+    templates, mass = _row_templates(mesh, N), float(c) / (24.0 * N * N)
+    stiffness2 = []  # twice the element stiffness matrix, per kind of triangle (integers)
+    for kind in (0, 1):
+        P = np.stack(np.divmod(mesh.t[:, kind * N * N].astype(np.int64), N + 1), axis=1)
+        edges = [P[(i + 2) % 3] - P[(i + 1) % 3] for i in range(3)]
+        stiffness2.append([[int(edges[i] @ edges[j]) for i in range(3)] for j in range(3)])
+    values, present = np.zeros((9, 9)), np.zeros((9, 9), dtype=bool)
+    for (ca, cb), template in templates.items():
+        halves, masses = np.zeros(9, dtype=np.int64), np.zeros(9, dtype=np.int64)
+        for j, i, kind, _, _, key in template:
+            k2, m = stiffness2[kind][j][i], 1 + (i == j)
+            if k2 / 2.0 + mass * m != 0.0:
+                halves[key], masses[key], present[3 * ca + cb, key] = halves[key] + k2, masses[key] + m, True
+        values[3 * ca + cb] = halves / 2.0 + mass * masses
+    return values, present
 
 
-def _stencil_sums(values: np.ndarray, keys: list[int], out: np.ndarray, present: np.ndarray, where) -> None:
-    """Sum the triplets of rows with the key sequence ``keys`` as scipy does: zero triplets dropped
-    (``eliminate_zeros``), the rest in scipy's row-sort order, each key's run summed left to right."""
-    kept = values != 0.0
-    codes = kept @ (1 << np.arange(len(keys), dtype=np.int64))
-    for code in np.unique(codes):
-        rows = np.flatnonzero(codes == code)
-        live = [k for k in range(len(keys)) if (int(code) >> k) & 1]
-        order = [live[k] for k in _sort_order(tuple(keys[k] for k in live))]
-        for start in range(len(order)):
-            key = keys[order[start]]
-            if start and keys[order[start - 1]] == key:
-                continue
-            acc = values[rows, order[start]]
-            for k in order[start + 1 :]:
-                if keys[k] != key:
-                    break
-                acc = acc + values[rows, k]
-            out[where[rows], key], present[where[rows], key] = acc, True
-
-
-def fk_system_matrix(mesh: MeshTri, N: int, c: float, band: int = STENCIL_BAND) -> sp.csr_matrix:
-    """``A = K + c M`` on the Friedrichs–Keller mesh ``mesh`` of ``N`` cells per side (either
-    diagonal, jittered or not): the matrix of ``system_matrix(p1_basis(mesh, intorder=2), c)``,
-    bit for bit (values, sparsity, index types), built from the 7-point stencil of each vertex
-    in bands of ``band`` grid lines instead of from ``9 · #T`` triplets.  Memory: the CSR arrays
-    (12 bytes per entry) plus one band's element matrices."""
+def fk_stencil_matrix(mesh: MeshTri, N: int, c: float, band: int = STENCIL_BAND) -> sp.csr_matrix:
+    """``A = K + c M`` on the unjittered Friedrichs–Keller mesh ``mesh`` of ``N`` cells per side
+    (either diagonal) from the exact stencil of each class of vertex (``_class_stencils``), written
+    row by row into the CSR arrays in bands of ``band`` grid lines: the matrix of ``fk_system_matrix``
+    with the sparsity and index types of scikit-fem's and each value exact up to one rounding of the
+    mass term, where scikit-fem's carry the round-off of the mesh's coordinates (within a few units
+    of the last place).  Memory: the CSR arrays plus one band's rows."""
     if mesh.p.shape[1] != (N + 1) ** 2 or mesh.t.shape[1] != 2 * N * N:
         raise ValueError(f"not a Friedrichs–Keller mesh with N={N} cells per side")
-    templates, n = _row_templates(mesh, N), (N + 1) ** 2
+    values, present = _class_stencils(mesh, N, c)
+    n = (N + 1) ** 2
     offsets = np.array([(da - 1) * (N + 1) + (db - 1) for da in range(3) for db in range(3)])
-    cap = sum(len({row[-1] for row in tmpl}) for tmpl in templates.values()) * n  # ≥ nnz
+    cls_a = _vertex_class(np.arange(N + 1), N)
     index = np.int32 if 7 * n < 2**31 else np.int64
-    indptr, indices, data, nnz = np.zeros(n + 1, dtype=index), np.empty(min(cap, 7 * n), index), None, 0
-    data = np.empty(indices.size)
+    row_cls = (3 * cls_a[:, None] + cls_a[None, :]).ravel()  # (N + 1)² small integers
+    counts = present.sum(axis=1)[row_cls]
+    indptr = np.zeros(n + 1, dtype=index)
+    np.cumsum(counts, out=indptr[1:])
+    nnz = int(indptr[-1])
+    indices, data = np.empty(nnz, dtype=index), np.empty(nnz)
     for a0 in range(0, N + 1, int(band)):
-        a1 = min(N + 1, a0 + int(band))
-        c0, c1 = max(a0 - 1, 0), min(a1, N)
-        elements = [kind * N * N + np.arange(c0 * N, c1 * N) for kind in (0, 1)]
-        local = [_local_matrices(mesh.p, mesh.t[:, e], float(c)).reshape(3, 3, c1 - c0, N) for e in elements]
-        a, b = np.divmod(np.arange(a0 * (N + 1), a1 * (N + 1)), N + 1)
-        out, present = np.zeros((a.size, 9)), np.zeros((a.size, 9), dtype=bool)
-        cls = 3 * _vertex_class(a, N) + _vertex_class(b, N)
-        for (ca, cb), tmpl in templates.items():
-            where = np.flatnonzero(cls == 3 * ca + cb)
-            if where.size:
-                rows = _band_rows(tmpl, local, a[where], b[where], c0)
-                _stencil_sums(rows, [row[-1] for row in tmpl], out, present, where)
-        count = present.sum(axis=1)
-        indptr[a0 * (N + 1) + 1 : a1 * (N + 1) + 1] = nnz + np.cumsum(count)
-        m = int(count.sum())
-        indices[nnz : nnz + m] = (np.arange(a0 * (N + 1), a1 * (N + 1))[:, None] + offsets)[present]
-        data[nnz : nnz + m] = out[present]
-        nnz += m
-    if nnz < indices.size:  # zero entries were dropped (c = 0): the arrays at their exact size
-        indices, data = indices[:nnz].copy(), data[:nnz].copy()
+        rows = np.arange(a0 * (N + 1), min(N + 1, a0 + int(band)) * (N + 1))
+        cls, lo, hi = row_cls[rows], indptr[rows[0]], indptr[rows[-1] + 1]
+        mask = present[cls]
+        indices[lo:hi] = (rows[:, None] + offsets)[mask]
+        data[lo:hi] = values[cls][mask]
     A = sp.csr_matrix((data, indices, indptr), shape=(n, n))
     A.has_sorted_indices = True  # canonical by construction: sorted keys, one entry per key
     return A
@@ -322,12 +280,14 @@ def load_vector(target: Basis | MeshTri, problem: Problem, chunk: int = CHUNK_EL
     degree-8 rule).  The value is that of ``assemble_linear_form`` with the form ``f v``,
     bit for bit: the same operations per triangle, the chunk's contributions added in
     scikit-fem's order (basis function, then triangle) and the chunks in order; but ``f``
-    is evaluated once per quadrature point, and only the chunk's points exist at a time.
+    is evaluated once per quadrature point, only the chunk's points exist at a time, and
+    triangles that cannot meet the problem's ``support`` are left out (their contributions are
+    ``+0.0``, and adding ``+0.0`` changes no sum: ``b`` never holds ``-0.0``).
     """
     mesh, (X, _) = _mesh_and_quadrature(target, INTORDER)
     n = mesh.p.shape[1]
     b = np.zeros(n)
-    for t, x, dx, _ in quadrature_chunks(target, chunk):
+    for t, x, dx, _ in quadrature_chunks(target, chunk, support=problem.support()):
         fx = problem.f(x)
         values = [np.broadcast_to(v, dx.shape) for v in p1_values(X)]
         weights = np.concatenate([np.sum(fx * v * dx, axis=1) for v in values])
@@ -336,19 +296,39 @@ def load_vector(target: Basis | MeshTri, problem: Problem, chunk: int = CHUNK_EL
     return b
 
 
+def _meeting(p: np.ndarray, t: np.ndarray, support: tuple[np.ndarray, float]) -> np.ndarray:
+    """Which triangles ``t`` may have a point in the open disc ``support``: those whose enclosing
+    disc (around the vertices' mean, through the farthest vertex) reaches into it (with a margin of
+    round-off)."""
+    centre, radius = support
+    corners = p[:, t]  # (2, 3, E)
+    mean = corners.mean(axis=1)
+    reach = np.sqrt(((corners - mean[:, None, :]) ** 2).sum(axis=0)).max(axis=0)
+    distance = np.hypot(mean[0] - centre[0], mean[1] - centre[1])
+    return distance - reach < radius * (1.0 + 1e-12) + 1e-12
+
+
 def quadrature_chunks(
-    target: Basis | MeshTri, chunk: int = CHUNK_ELEMENTS, intorder: int = INTORDER
+    target: Basis | MeshTri,
+    chunk: int = CHUNK_ELEMENTS,
+    intorder: int = INTORDER,
+    support: tuple[np.ndarray, float] | None = None,
 ) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
     """Per chunk of at most ``chunk`` consecutive triangles ``t`` (3, E): the quadrature points
     ``x`` (2, E, q), the weights ``|det A| w_q`` (E, q) and the inverse maps ``A⁻¹`` (2, 2, E),
     with scikit-fem's operations (``MappingAffine``) and the rule of ``target`` (a basis's own, or
-    the degree-``intorder`` rule of a mesh); only one chunk's arrays exist at a time."""
+    the degree-``intorder`` rule of a mesh); only one chunk's arrays exist at a time.  With a
+    ``support`` (centre, radius), only the chunk's triangles that may meet that disc."""
     if isinstance(chunk, bool) or int(chunk) < 1:
         raise ValueError(f"chunk={chunk!r} must be a positive number of triangles")
     mesh, (X, W) = _mesh_and_quadrature(target, intorder)
     n_el = mesh.t.shape[1]
     for start in range(0, n_el, int(chunk)):
         t = mesh.t[:, start : min(n_el, start + int(chunk))]
+        if support is not None:
+            t = t[:, _meeting(mesh.p, t, support)]
+            if not t.shape[1]:
+                continue
         A, shift, det, inv = _affine_maps(mesh.p, t)
         x = (np.einsum("ijk,jl", A, X).T + shift.T).T  # MappingAffine.F
         yield t, x, _quadrature_measure(det, W), inv

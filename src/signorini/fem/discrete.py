@@ -12,7 +12,7 @@ import numpy as np
 import scipy.sparse as sp
 from skfem import MeshTri
 
-from signorini.fem.assembly import fk_system_matrix, load_vector
+from signorini.fem.assembly import fk_stencil_matrix, load_vector
 from signorini.fem.mesh import DEFAULT_DIAGONAL, fk_boundary_nodes, friedrichs_keller
 from signorini.fem.problem import Problem
 
@@ -31,11 +31,12 @@ class DiscreteProblem:
 
 
 def build(problem: Problem, N: int, diagonal: str = DEFAULT_DIAGONAL) -> DiscreteProblem:
-    """Mesh and assemble (S_h) for ``N`` cells per side: ``A`` from the Friedrichs–Keller stencil
-    and ``b`` streamed over chunks of triangles, both bit-identical to ``assembly.assemble`` (the
-    scikit-fem route) in O(#vertices) memory."""
+    """Mesh and assemble (S_h) for ``N`` cells per side: ``A`` written from the exact stencil of the
+    Friedrichs–Keller mesh (``assembly.fk_stencil_matrix``: scikit-fem's matrix without the round-off
+    of the mesh's coordinates) and ``b`` streamed over the triangles that meet the support of ``f``
+    (bit for bit scikit-fem's), in O(#vertices) memory."""
     mesh = friedrichs_keller(N, diagonal)
-    A, b = fk_system_matrix(mesh, int(N), problem.c), load_vector(mesh, problem)
+    A, b = fk_stencil_matrix(mesh, int(N), problem.c), load_vector(mesh, problem)
     return DiscreteProblem(problem, int(N), diagonal, mesh, A, b, fk_boundary_nodes(int(N)))
 
 

@@ -46,9 +46,10 @@ class ExactProblem(Protocol):
     the optional capabilities, which ``ProblemBase`` gives as their defaults: the points where ``u``
     is not smooth (``singular_points``: boundary rules split and grade there) and further break points
     on ∂Ω (``boundary_breaks``: split there), bounds of the derivatives of ``u`` (``derivative_bounds``,
-    by which the true maxima exclude triangles), ``u`` with ``∇u`` in one evaluation, and the problem
+    by which the true maxima exclude triangles), ``u`` with ``∇u`` in one evaluation, the problem
     with ``u ≡ 0`` on the same pieces (``vanishing``: the norms of a P1 function, e.g. an algebraic
-    error, are its errors there)."""
+    error, are its errors there), and a disc outside which ``u`` and ``f`` are exactly zero
+    (``support``: the load vector leaves out the triangles that cannot meet it)."""
 
     c: float
 
@@ -69,6 +70,8 @@ class ExactProblem(Protocol):
     def u_and_grad_u(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]: ...
 
     def vanishing(self) -> ExactProblem: ...
+
+    def support(self) -> tuple[np.ndarray, float] | None: ...
 
 
 class ProblemBase:
@@ -97,6 +100,11 @@ class ProblemBase:
     def vanishing(self) -> ExactProblem:
         """``u ≡ 0`` with this problem's points (``Vanishing``)."""
         return Vanishing(self)
+
+    def support(self) -> tuple[np.ndarray, float] | None:
+        """(centre (2,), radius) of a disc outside which ``u`` and ``f`` are exactly ``+0.0``; None:
+        they may be non-zero anywhere."""
+        return None
 
     @classmethod
     def parameters(cls) -> tuple[str, ...]:
@@ -198,6 +206,11 @@ class Problem(ProblemBase):
         """(2, 2): (x0 ± R, 0), where the cut-off joins 0 (C⁴ only): boundary rules split there."""
         return np.array([[self.x0 - self.R, self.x0 + self.R], [0.0, 0.0]])
 
+    def support(self) -> tuple[np.ndarray, float]:
+        """The disc r < R around the free point: outside it ``_local`` leaves ``u``, ``∇u`` and ``f``
+        at the zeros they start from."""
+        return np.array([self.x0, 0.0]), self.R
+
     def vanishing(self) -> Problem:
         """The same problem with amplitude 0: u ≡ 0 with the same free point and cut-off."""
         return replace(self, A=0.0)
@@ -216,33 +229,57 @@ class Problem(ProblemBase):
             return np.zeros(np.shape(x)[1:]), np.zeros(np.shape(x))
         inside, dx, dy, r, re, im, ut = self._local(x)
         value, grad = np.zeros(np.shape(x)[1:]), np.zeros(np.shape(x))
-        psi, dpr = self.psi(r), self.dpsi_over_r(r)
+        psi, dpr, _ = self._cutoff(r)
         value[inside] = self.A * psi * ut
         grad[0][inside] = self.A * (dpr * ut * dx - 1.5 * psi * im)
         grad[1][inside] = self.A * (dpr * ut * dy - 1.5 * psi * re)
         return value, grad
 
     # --- the cut-off ψ(r) = 1 - S(r/R), S(s) = s⁵(126 - 420 s + 540 s² - 315 s³ + 70 s⁴) ---
+    # Powers as products (numpy's ``**`` with an exponent above 2 calls ``pow`` per element), from
+    # one ``s = r/R`` and ``t = 1 - s`` per point: ``_cutoff`` gives ψ, ψ'/r and ψ'' at once, each
+    # bit for bit the value of its method below.
+    def _s(self, r: np.ndarray) -> np.ndarray:
+        return np.clip(np.asarray(r, dtype=float) / self.R, 0.0, 1.0)
+
+    @staticmethod
+    def _psi_of(t: np.ndarray) -> np.ndarray:
+        t2 = t * t
+        return t2 * t2 * t * (126.0 + t * (-420.0 + t * (540.0 + t * (-315.0 + 70.0 * t))))
+
+    def _dpsi_over_r_of(self, s: np.ndarray, t: np.ndarray) -> np.ndarray:
+        t2 = t * t
+        return -630.0 * (s * s * s) * (t2 * t2) / (self.R * self.R)
+
+    def _d2psi_of(self, s: np.ndarray, t: np.ndarray) -> np.ndarray:
+        return -2520.0 * (s * s * s) * (t * t * t) * (1.0 - 2.0 * s) / (self.R * self.R)
+
+    def _cutoff(self, r: np.ndarray, second: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """(ψ, ψ'/r, ψ'' if ``second`` else None) at ``r``."""
+        s = self._s(r)
+        t = 1.0 - s
+        return self._psi_of(t), self._dpsi_over_r_of(s, t), self._d2psi_of(s, t) if second else None
+
     def psi(self, r: np.ndarray) -> np.ndarray:
         """ψ(r); the C⁴ degree-9 polynomial cut-off, zero for r ≥ R."""
         # ψ = 1 - S(s) = S(1 - s) by the symmetry of S; the second form is exactly 0 at s = 1
-        t = 1.0 - np.clip(np.asarray(r, dtype=float) / self.R, 0.0, 1.0)
-        return t**5 * (126.0 + t * (-420.0 + t * (540.0 + t * (-315.0 + 70.0 * t))))
+        return self._psi_of(1.0 - self._s(r))
 
     def dpsi(self, r: np.ndarray) -> np.ndarray:
         """ψ'(r) = -630 s⁴ (1 - s)⁴ / R."""
-        s = np.clip(np.asarray(r, dtype=float) / self.R, 0.0, 1.0)
-        return -630.0 * s**4 * (1.0 - s) ** 4 / self.R
+        s = self._s(r)
+        t2 = (1.0 - s) * (1.0 - s)
+        return -630.0 * (s * s) * (s * s) * (t2 * t2) / self.R
 
     def dpsi_over_r(self, r: np.ndarray) -> np.ndarray:
         """ψ'(r)/r = -630 s³ (1 - s)⁴ / R², without the division by r."""
-        s = np.clip(np.asarray(r, dtype=float) / self.R, 0.0, 1.0)
-        return -630.0 * s**3 * (1.0 - s) ** 4 / self.R**2
+        s = self._s(r)
+        return self._dpsi_over_r_of(s, 1.0 - s)
 
     def d2psi(self, r: np.ndarray) -> np.ndarray:
         """ψ''(r) = -2520 s³ (1 - s)³ (1 - 2 s) / R²."""
-        s = np.clip(np.asarray(r, dtype=float) / self.R, 0.0, 1.0)
-        return -2520.0 * s**3 * (1.0 - s) ** 3 * (1.0 - 2.0 * s) / self.R**2
+        s = self._s(r)
+        return self._d2psi_of(s, 1.0 - s)
 
     # --- the singular harmonic factor, via complex square roots (no trigonometry) ---
     # With z = (x₁ - x0) + i x₂ (x₂ ≥ 0), ũ = -Im z^{3/2} and ∇ũ = -(3/2)(Im √z, Re √z),
@@ -256,10 +293,14 @@ class Problem(ProblemBase):
     def _local(self, x: np.ndarray):
         """Points inside the support r < R: mask, dx, dy, r, Re √z, Im √z, ũ."""
         x = np.asarray(x, dtype=float)
-        dx, dy = x[0] - self.x0, np.abs(x[1])
-        r = np.hypot(dx, dy)
-        inside = r < self.R
-        dx, dy, r = dx[inside], dy[inside], r[inside]
+        dx, dy = (x[0] - self.x0).ravel(), np.abs(x[1]).ravel()
+        # r = hypot(dx, dy) only where the squares (cheaper, within a few ulps) leave r < R possible
+        near = np.flatnonzero(dx * dx + dy * dy < self.R * self.R * (1.0 + 1e-12))
+        r = np.hypot(dx[near], dy[near])
+        near = near[r < self.R]
+        inside = np.zeros(np.shape(x)[1:], dtype=bool)
+        inside.flat[near] = True
+        dx, dy, r = dx[near], dy[near], r[r < self.R]
         re = np.sqrt(np.maximum(r + dx, 0.0) / 2.0)
         im = np.sqrt(np.maximum(r - dx, 0.0) / 2.0)
         ut = -im * (3.0 * re * re - im * im)
@@ -276,7 +317,7 @@ class Problem(ProblemBase):
         """∇u = A ((ψ'/r) ũ (dx, dy) + ψ ∇ũ), stacked as shape (2, ...)."""
         inside, dx, dy, r, re, im, ut = self._local(x)
         out = np.zeros(np.shape(x))
-        psi, dpr = self.psi(r), self.dpsi_over_r(r)
+        psi, dpr, _ = self._cutoff(r)
         out[0][inside] = self.A * (dpr * ut * dx - 1.5 * psi * im)
         out[1][inside] = self.A * (dpr * ut * dy - 1.5 * psi * re)
         return out
@@ -285,16 +326,16 @@ class Problem(ProblemBase):
         """-Δu = -A (2 ψ' ∂_r ũ + ũ (ψ'' + ψ'/r)), using Δũ = 0 and r ∂_r ũ = (3/2) ũ."""
         inside, _, _, r, _, _, ut = self._local(x)
         out = np.zeros(np.shape(x)[1:])
-        dpr = self.dpsi_over_r(r)
-        out[inside] = -self.A * ut * (3.0 * dpr + self.d2psi(r) + dpr)
+        _, dpr, d2 = self._cutoff(r, second=True)
+        out[inside] = -self.A * ut * (3.0 * dpr + d2 + dpr)
         return out
 
     def f(self, x: np.ndarray) -> np.ndarray:
         """Right-hand side f = -Δu + c u."""
         inside, _, _, r, _, _, ut = self._local(x)
         out = np.zeros(np.shape(x)[1:])
-        dpr = self.dpsi_over_r(r)
-        out[inside] = self.A * ut * (-4.0 * dpr - self.d2psi(r) + self.c * self.psi(r))
+        psi, dpr, d2 = self._cutoff(r, second=True)
+        out[inside] = self.A * ut * (-4.0 * dpr - d2 + self.c * psi)
         return out
 
 
