@@ -11,7 +11,7 @@ from signorini.fem.discrete import build
 from signorini.fem.mesh import friedrichs_keller
 from signorini.fem.norms.conventional import evaluate_norms
 from signorini.fem.norms.conventions import Conventions
-from signorini.fem.problem import Problem
+from signorini.fem.problem import Problem, ProblemBase
 from signorini.fem.solve import solve_discrete
 from signorini.pipeline.artifacts import save_npz
 from signorini.published import TABLE1_NORMS
@@ -21,7 +21,7 @@ from signorini.studies.scene.store import SceneMesh
 PARAMS = {"x0": 0.5, "R": 0.45, "A": 10, "c": 1}
 
 
-class _Quadratic:
+class _Quadratic(ProblemBase):
     """A stand-in problem whose f·φ is a polynomial of degree 3: every rule here integrates it exactly."""
 
     @staticmethod
@@ -32,8 +32,8 @@ class _Quadratic:
 @pytest.mark.parametrize("quadrature", ["stroud4_acute1", "stroud4_right", "dunavant8"])
 def test_exact_for_polynomials(quadrature):
     mesh = friedrichs_keller(7, "sw_ne")
-    b = load_vector_by_rule(mesh, _Quadratic, quadrature)
-    np.testing.assert_allclose(b, load_vector(mesh, _Quadratic), rtol=0, atol=1e-15)
+    b = load_vector_by_rule(mesh, _Quadratic(), quadrature)
+    np.testing.assert_allclose(b, load_vector(mesh, _Quadratic()), rtol=0, atol=1e-15)
 
 
 def test_rules_differ_for_the_manufactured_load():
