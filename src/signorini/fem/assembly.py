@@ -244,30 +244,37 @@ def _class_stencils(mesh: MeshTri, N: int, c: float) -> tuple[np.ndarray, np.nda
 
 def fk_stencil_matrix(mesh: MeshTri, N: int, c: float, band: int = STENCIL_BAND) -> sp.csr_matrix:
     """``A = K + c M`` on the unjittered Friedrichs–Keller mesh ``mesh`` of ``N`` cells per side
-    (either diagonal) from the exact stencil of each class of vertex (``_class_stencils``), written
-    row by row into the CSR arrays in bands of ``band`` grid lines: the matrix of ``fk_system_matrix``
-    with the sparsity and index types of scikit-fem's and each value exact up to one rounding of the
-    mass term, where scikit-fem's carry the round-off of the mesh's coordinates (within a few units
-    of the last place).  Memory: the CSR arrays plus one band's rows."""
+    (either diagonal) from the exact stencil of each class of vertex (``_class_stencils``): the
+    matrix of scikit-fem's ``system_matrix(p1_basis(mesh, intorder=2), c)`` with its sparsity and
+    index types and each value exact up to one rounding of the mass term, where scikit-fem's carry
+    the round-off of the mesh's coordinates (within a few units of the last place per cell per side).
+    A grid line of vertices has one of three row sequences (the first line, an inner one, the
+    last): each is made once and copied into the CSR arrays, ``band`` lines at a time, shifted by
+    the line's first vertex.  Memory: the CSR arrays plus one band's copies."""
     if mesh.p.shape[1] != (N + 1) ** 2 or mesh.t.shape[1] != 2 * N * N:
         raise ValueError(f"not a Friedrichs–Keller mesh with N={N} cells per side")
     values, present = _class_stencils(mesh, N, c)
-    n = (N + 1) ** 2
-    offsets = np.array([(da - 1) * (N + 1) + (db - 1) for da in range(3) for db in range(3)])
-    cls_a = _vertex_class(np.arange(N + 1), N)
+    n, width = (N + 1) ** 2, N + 1
+    offsets = np.array([(da - 1) * width + (db - 1) for da in range(3) for db in range(3)])
+    cls_b = _vertex_class(np.arange(width), N)
     index = np.int32 if 7 * n < 2**31 else np.int64
-    row_cls = (3 * cls_a[:, None] + cls_a[None, :]).ravel()  # (N + 1)² small integers
-    counts = present.sum(axis=1)[row_cls]
     indptr = np.zeros(n + 1, dtype=index)
-    np.cumsum(counts, out=indptr[1:])
-    nnz = int(indptr[-1])
-    indices, data = np.empty(nnz, dtype=index), np.empty(nnz)
-    for a0 in range(0, N + 1, int(band)):
-        rows = np.arange(a0 * (N + 1), min(N + 1, a0 + int(band)) * (N + 1))
-        cls, lo, hi = row_cls[rows], indptr[rows[0]], indptr[rows[-1] + 1]
-        mask = present[cls]
-        indices[lo:hi] = (rows[:, None] + offsets)[mask]
-        data[lo:hi] = values[cls][mask]
+    lines = {}  # line class -> (columns relative to the line's first vertex, values) of its rows
+    for ca in sorted({int(k) for k in cls_b}):
+        mask = present[3 * ca + cls_b]
+        lines[ca] = ((np.arange(width)[:, None] + offsets)[mask].astype(index), values[3 * ca + cls_b][mask])
+    line_cls = _vertex_class(np.arange(width), N)
+    per_row = present.sum(axis=1)[3 * line_cls[:, None] + cls_b[None, :]]  # (line, row of the line)
+    np.cumsum(per_row.ravel(), out=indptr[1:])
+    indices, data = np.empty(int(indptr[-1]), dtype=index), np.empty(int(indptr[-1]))
+    for a0 in range(0, width, int(band)):
+        band_cls = line_cls[a0 : a0 + int(band)]
+        for ca in np.unique(band_cls):
+            a = np.flatnonzero(band_cls == ca) + a0  # consecutive lines of one class
+            cols, vals = lines[int(ca)]
+            lo, hi = int(indptr[a[0] * width]), int(indptr[(a[-1] + 1) * width])
+            indices[lo:hi] = (cols[None, :] + (a.astype(index) * index(width))[:, None]).ravel()
+            data[lo:hi] = np.tile(vals, a.size)
     A = sp.csr_matrix((data, indices, indptr), shape=(n, n))
     A.has_sorted_indices = True  # canonical by construction: sorted keys, one entry per key
     return A

@@ -293,14 +293,10 @@ class Problem(ProblemBase):
     def _local(self, x: np.ndarray):
         """Points inside the support r < R: mask, dx, dy, r, Re √z, Im √z, ũ."""
         x = np.asarray(x, dtype=float)
-        dx, dy = (x[0] - self.x0).ravel(), np.abs(x[1]).ravel()
-        # r = hypot(dx, dy) only where the squares (cheaper, within a few ulps) leave r < R possible
-        near = np.flatnonzero(dx * dx + dy * dy < self.R * self.R * (1.0 + 1e-12))
-        r = np.hypot(dx[near], dy[near])
-        near = near[r < self.R]
-        inside = np.zeros(np.shape(x)[1:], dtype=bool)
-        inside.flat[near] = True
-        dx, dy, r = dx[near], dy[near], r[r < self.R]
+        dx, dy = x[0] - self.x0, np.abs(x[1])
+        r = np.hypot(dx, dy)
+        inside = r < self.R
+        dx, dy, r = dx[inside], dy[inside], r[inside]
         re = np.sqrt(np.maximum(r + dx, 0.0) / 2.0)
         im = np.sqrt(np.maximum(r - dx, 0.0) / 2.0)
         ut = -im * (3.0 * re * re - im * im)
