@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import signal
 import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -43,8 +44,12 @@ def _make_setup(repo: Path, hang: str | None = None, **env: str) -> subprocess.P
     env = {**os.environ, "FAKE_UV": str(repo / "fake-uv"), **env}
     if hang:
         env[hang] = str(repo / "hanging")
+    # Ctrl-C must reach make even when the suite itself was started with SIGINT ignored (a
+    # background job of a shell, nohup): an ignored signal stays ignored across exec, so make
+    # starts from a Python that restores the default first
+    restore = "import os, signal, sys; signal.signal(signal.SIGINT, signal.SIG_DFL); os.execvp('make', sys.argv[1:])"
     return subprocess.Popen(
-        ["make", "setup", "UV=", f"PYTHON={repo / 'fake-python'}"],
+        [sys.executable, "-c", restore, "make", "setup", "UV=", f"PYTHON={repo / 'fake-python'}"],
         cwd=repo,
         env=env,
         start_new_session=True,
