@@ -256,19 +256,18 @@ def fk_stencil_matrix(mesh: MeshTri, N: int, c: float, band: int = STENCIL_BAND)
     values, present = _class_stencils(mesh, N, c)
     n, width = (N + 1) ** 2, N + 1
     offsets = np.array([(da - 1) * width + (db - 1) for da in range(3) for db in range(3)])
-    cls_b = _vertex_class(np.arange(width), N)
+    classes = _vertex_class(np.arange(width), N)  # of the grid lines, and of the rows along one
     index = np.int32 if 7 * n < 2**31 else np.int64
     indptr = np.zeros(n + 1, dtype=index)
     lines = {}  # line class -> (columns relative to the line's first vertex, values) of its rows
-    for ca in sorted({int(k) for k in cls_b}):
-        mask = present[3 * ca + cls_b]
-        lines[ca] = ((np.arange(width)[:, None] + offsets)[mask].astype(index), values[3 * ca + cls_b][mask])
-    line_cls = _vertex_class(np.arange(width), N)
-    per_row = present.sum(axis=1)[3 * line_cls[:, None] + cls_b[None, :]]  # (line, row of the line)
+    for ca in sorted({int(k) for k in classes}):
+        mask = present[3 * ca + classes]
+        lines[ca] = ((np.arange(width)[:, None] + offsets)[mask].astype(index), values[3 * ca + classes][mask])
+    per_row = present.sum(axis=1)[3 * classes[:, None] + classes[None, :]]  # (line, row of the line)
     np.cumsum(per_row.ravel(), out=indptr[1:])
     indices, data = np.empty(int(indptr[-1]), dtype=index), np.empty(int(indptr[-1]))
     for a0 in range(0, width, int(band)):
-        band_cls = line_cls[a0 : a0 + int(band)]
+        band_cls = classes[a0 : a0 + int(band)]
         for ca in np.unique(band_cls):
             a = np.flatnonzero(band_cls == ca) + a0  # consecutive lines of one class
             cols, vals = lines[int(ca)]
