@@ -304,11 +304,12 @@ def test_load_vector_is_the_scikit_fem_linear_form_bit_for_bit(N, diagonal, jitt
 
 @pytest.mark.parametrize("jitter", [0.0, 0.3])
 def test_the_triangles_left_out_of_the_load_vector_have_no_quadrature_point_in_the_support(jitter):
-    from signorini.fem.assembly import _meeting, quadrature_chunks
+    from signorini.fem.assembly import quadrature_chunks
+    from signorini.fem.mesh import triangles_meeting_disc
 
     mesh = friedrichs_keller(40, jitter=jitter)
     centre, radius = np.array([0.47, 0.0]), 0.3
-    keep = _meeting(mesh.p, mesh.t, (centre, radius))
+    keep = triangles_meeting_disc(mesh.p, mesh.t, (centre, radius))
     (_, x, _, _), *_ = quadrature_chunks(mesh, chunk=mesh.t.shape[1])
     inside = (np.hypot(x[0] - centre[0], x[1] - centre[1]) < radius).any(axis=1)
     assert np.all(keep[inside]) and 0 < keep.sum() < keep.size

@@ -9,7 +9,15 @@ import numpy as np
 import pytest
 from helpers import same_bits as _same_bits
 
-from signorini.fem.mesh import DIAGONALS, boundary_nodes, fk_boundary_nodes, friedrichs_keller, mesh_width
+from signorini.fem.mesh import (
+    DIAGONALS,
+    boundary_edges,
+    boundary_nodes,
+    fk_boundary_nodes,
+    friedrichs_keller,
+    mesh_width,
+    triangles_meeting_disc,
+)
 
 SIZES = [1, 2, 3, 8]
 
@@ -153,3 +161,50 @@ def test_numpy_integer_N_is_accepted():
 def test_fk_boundary_nodes_are_the_mesh_boundary_nodes(N):
     for diagonal in DIAGONALS:
         assert _same_bits(fk_boundary_nodes(N), boundary_nodes(friedrichs_keller(N, diagonal)))
+
+
+@pytest.mark.parametrize(
+    "mesh",
+    [
+        *(friedrichs_keller(N, d) for N in (1, 2, 3, 8) for d in DIAGONALS),
+        friedrichs_keller(9, "nw_se", jitter=0.3, seed=4),
+        pytest.param("symmetric", id="union_jack"),
+        pytest.param("sqsymmetric", id="criss_cross"),
+    ],
+)
+def test_boundary_edges_are_scikit_fem_boundary_facets(mesh):
+    """The edges on ∂Ω and their order are scikit-fem's, on meshes with and without diagonals
+    that join two sides (the corner triangles of the union-jack mesh) and with interior edges
+    whose vertices both lie on ∂Ω."""
+    from skfem import MeshTri
+
+    if isinstance(mesh, str):
+        mesh = getattr(MeshTri, f"init_{mesh}")().refined(2)
+    expected = mesh.facets[:, mesh.boundary_facets()]
+    got = boundary_edges(mesh)
+    assert got.dtype == expected.dtype and np.array_equal(got, expected)
+    assert np.array_equal(boundary_nodes(mesh), np.sort(mesh.boundary_nodes()))
+
+
+def test_boundary_edges_of_a_corner_cut_by_an_interior_edge():
+    """Two triangles sharing the diagonal from (1, 0) to (0, 1): that edge has both vertices on ∂Ω
+    but on two sides, and the corner square's hypotenuse inside a larger mesh is not on ∂Ω."""
+    from skfem import MeshTri
+
+    p = np.array([[0.0, 1.0, 0.0, 1.0], [0.0, 0.0, 1.0, 1.0]])
+    mesh = MeshTri(p, np.array([[0, 1, 2], [1, 3, 2]]).T)
+    assert {tuple(e) for e in boundary_edges(mesh).T} == {(0, 1), (0, 2), (1, 3), (2, 3)}
+
+
+@pytest.mark.parametrize("jitter", [0.0, 0.3])
+def test_a_triangle_not_meeting_the_disc_has_no_point_in_it(jitter, rng):
+    """Every point of a triangle left out (random barycentric points, and its vertices) lies outside
+    the open disc; the triangles kept are a strict subset."""
+    mesh = friedrichs_keller(30, jitter=jitter)
+    centre, radius = np.array([0.5, 0.0]), 0.27
+    keep = triangles_meeting_disc(mesh.p, mesh.t, (centre, radius))
+    lam = rng.dirichlet(np.ones(3), size=200).T  # (3, 200)
+    lam = np.hstack([lam, np.eye(3)])
+    x = np.einsum("dke,kq->deq", mesh.p[:, mesh.t], lam)
+    inside = (np.hypot(x[0] - centre[0], x[1] - centre[1]) < radius).any(axis=1)
+    assert np.all(keep[inside]) and 0 < keep.sum() < keep.size

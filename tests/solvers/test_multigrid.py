@@ -302,3 +302,24 @@ def test_a_nested_start_that_does_not_settle_falls_back_to_the_plain_cold_start(
         mg = multigrid_solve(disc.A, disc.b, disc.boundary)
     assert len(calls) == 3 and "plain cold start" in caplog.text
     assert_same_solution(mg, direct)
+
+
+def test_work_units_and_v_cycles_are_counted_and_bounded_on_a_mesh_sequence():
+    """Each Newton step reports its V-cycles and fine-grid work units; they add up to the solve's;
+    a V-cycle costs a few products with the fine operator (operator complexity 4/3, three passes
+    per level, the transfers); and from the cascade the counts stay bounded as the mesh is refined
+    (mesh independence, a test on counts)."""
+    totals = {}
+    for N in (101, 201, 401):
+        result = solve_discrete(build(Problem(), N), "multigrid")
+        info, steps = result.info, result.history
+        assert sum(row["v_cycles"] for row in steps) == info["v_cycles"] > 0
+        assert sum(row["work_units"] for row in steps) == pytest.approx(info["work_units"], rel=1e-12)
+        per_cycle = (info["work_units"] - info["v_cycles"]) / info["v_cycles"]  # less ≤ 1 product each
+        assert 3.0 < per_cycle < 7.0
+        cascade = info["cascade"]
+        assert cascade["N"] == N // 4 and 0.0 < cascade["work_units_fine"] < cascade["work_units"]
+        assert info["work_units_total"] == pytest.approx(info["work_units"] + cascade["work_units_fine"])
+        totals[N] = (info["v_cycles"], info["work_units_total"])
+    assert max(cycles for cycles, _ in totals.values()) <= 40
+    assert max(work for _, work in totals.values()) <= 2.0 * min(work for _, work in totals.values())

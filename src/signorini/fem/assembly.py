@@ -32,6 +32,7 @@ from skfem.mapping import MappingAffine
 from skfem.quadrature import get_quadrature
 from skfem.refdom import RefTri
 
+from signorini.fem.mesh import triangles_meeting_disc
 from signorini.fem.problem import Problem
 
 INTORDER = 8  # scikit-fem's 16-point degree-8 Dunavant rule
@@ -302,18 +303,6 @@ def load_vector(target: Basis | MeshTri, problem: Problem, chunk: int = CHUNK_EL
     return b
 
 
-def _meeting(p: np.ndarray, t: np.ndarray, support: tuple[np.ndarray, float]) -> np.ndarray:
-    """Which triangles ``t`` may have a point in the open disc ``support``: those whose enclosing
-    disc (around the vertices' mean, through the farthest vertex) reaches into it (with a margin of
-    round-off)."""
-    centre, radius = support
-    corners = p[:, t]  # (2, 3, E)
-    mean = corners.mean(axis=1)
-    reach = np.sqrt(((corners - mean[:, None, :]) ** 2).sum(axis=0)).max(axis=0)
-    distance = np.hypot(mean[0] - centre[0], mean[1] - centre[1])
-    return distance - reach < radius * (1.0 + 1e-12) + 1e-12
-
-
 def quadrature_chunks(
     target: Basis | MeshTri,
     chunk: int = CHUNK_ELEMENTS,
@@ -332,7 +321,7 @@ def quadrature_chunks(
     for start in range(0, n_el, int(chunk)):
         t = mesh.t[:, start : min(n_el, start + int(chunk))]
         if support is not None:
-            t = t[:, _meeting(mesh.p, t, support)]
+            t = t[:, triangles_meeting_disc(mesh.p, t, support)]
             if not t.shape[1]:
                 continue
         A, shift, det, inv = _affine_maps(mesh.p, t)

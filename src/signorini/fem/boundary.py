@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from signorini.fem.mesh import boundary_edges
 from signorini.fem.quadrature import gauss_legendre_01
 
 if TYPE_CHECKING:
@@ -90,8 +91,7 @@ def _pieces(cuts: list[float], graded: list[float]) -> list[tuple[float, float, 
 def boundary_rule(mesh: MeshTri, problem: ExactProblem, n: int, split: bool = True) -> BoundaryRule:
     """An ``n``-point Gauss–Legendre rule on every piece of every boundary edge (see the module);
     ``split=False``: on every whole edge (the rule before the split, kept for comparison)."""
-    facets = mesh.facets[:, mesh.boundary_facets()]
-    a, b = facets[0], facets[1]
+    a, b = boundary_edges(mesh)
     pa, pb = mesh.p[:, a], mesh.p[:, b]
     none = np.zeros((2, 0))
     sing = _params_on_edges(pa, pb, singular_points(problem) if split else none)

@@ -69,15 +69,48 @@ def _fk_triangles(N: int, diagonal: str) -> np.ndarray:
     return t
 
 
+def boundary_edges(mesh: MeshTri) -> np.ndarray:
+    """(2, k) the edges on ∂Ω of a triangulation of the unit square, as scikit-fem's
+    ``mesh.facets[:, mesh.boundary_facets()]`` gives them (each ``a < b``, in lexicographic order),
+    without building every edge of the mesh: an edge on ∂Ω has both vertices on one side of the
+    square, and of those edges the ones of a single triangle are on ∂Ω (an interior edge between
+    two sides, like a diagonal cutting a corner, belongs to two).  scikit-fem finds all ``3 N²``
+    edges first (docs/evidence/design-measurements.md#boundary-edges)."""
+    p, t = mesh.p, mesh.t
+    x, y = p
+    side = (x == 0.0) * np.uint8(1) | (x == 1.0) * np.uint8(2) | (y == 0.0) * np.uint8(4) | (y == 1.0) * np.uint8(8)
+    t = t[:, np.count_nonzero(side[t], axis=0) >= 2]  # the triangles with an edge on ∂Ω, and a few more
+    edges = np.hstack([t[[0, 1]], t[[1, 2]], t[[0, 2]]])
+    edges = edges[:, (side[edges[0]] & side[edges[1]]) != 0]
+    edges = np.sort(edges, axis=0)
+    keys, counts = np.unique(edges[0].astype(np.int64) * p.shape[1] + edges[1], return_counts=True)
+    once = keys[counts == 1]
+    return np.vstack(np.divmod(once, p.shape[1])).astype(t.dtype)
+
+
 def boundary_nodes(mesh: MeshTri) -> np.ndarray:
-    """Sorted indices of the vertices on ∂Ω (the constrained unknowns)."""
-    return np.sort(mesh.boundary_nodes())
+    """Sorted indices of the vertices on ∂Ω (the constrained unknowns): scikit-fem's
+    ``mesh.boundary_nodes()``, from ``boundary_edges``."""
+    return np.unique(boundary_edges(mesh))
 
 
 def fk_boundary_nodes(N: int) -> np.ndarray:
     """``boundary_nodes(friedrichs_keller(N, ...))`` from the vertex numbering alone: vertex (i, j)
     (index i (N + 1) + j) lies on ∂Ω iff i or j is 0 or N.  scikit-fem finds them through the
-    mesh's facets, which at N = 1001 costs seconds and the memory of 3 N² edges.  The index type
+    mesh's facets (docs/evidence/design-measurements.md#boundary-edges).  The index type
     is scikit-fem's (``int32``, that of ``MeshTri.t``)."""
     i, j = np.divmod(np.arange((N + 1) ** 2, dtype=np.int32), np.int32(N + 1))
     return np.flatnonzero((i == 0) | (i == N) | (j == 0) | (j == N)).astype(np.int32)
+
+
+def triangles_meeting_disc(p: np.ndarray, t: np.ndarray, support: tuple[np.ndarray, float]) -> np.ndarray:
+    """Which triangles ``t`` may have a point in the open disc ``support`` (centre, radius): those
+    whose bounding box comes nearer to the centre than the radius (with a margin of round-off).
+    A point of the triangle lies in its box, so a triangle left out has none in the disc."""
+    centre, radius = support
+    gaps = []
+    for k in range(2):  # the distance from the centre to the box, per coordinate
+        a, b, c = p[k][t[0]], p[k][t[1]], p[k][t[2]]
+        lo, hi = np.minimum(np.minimum(a, b), c), np.maximum(np.maximum(a, b), c)
+        gaps.append(np.maximum(np.maximum(lo - centre[k], centre[k] - hi), 0.0))
+    return np.hypot(gaps[0], gaps[1]) < radius * (1.0 + 1e-12) + 1e-12

@@ -159,6 +159,10 @@ class Vanishing(ProblemBase):
     def derivative_bounds(self) -> DerivativeBounds:
         return _ZeroBounds()
 
+    def support(self) -> tuple[np.ndarray, float]:
+        """The empty disc (radius 0): ``u`` and ``f`` vanish everywhere."""
+        return np.zeros(2), 0.0
+
 
 @dataclass(frozen=True)
 class Problem(ProblemBase):
@@ -208,8 +212,8 @@ class Problem(ProblemBase):
 
     def support(self) -> tuple[np.ndarray, float]:
         """The disc r < R around the free point: outside it ``_local`` leaves ``u``, ``∇u`` and ``f``
-        at the zeros they start from."""
-        return np.array([self.x0, 0.0]), self.R
+        at the zeros they start from; for ``A = 0`` the empty disc of radius 0."""
+        return np.array([self.x0, 0.0]), self.R if self.A != 0.0 else 0.0
 
     def vanishing(self) -> Problem:
         """The same problem with amplitude 0: u ≡ 0 with the same free point and cut-off."""
@@ -228,11 +232,13 @@ class Problem(ProblemBase):
         if self.A == 0.0:  # u ≡ 0 (the norms of a P1 function, e.g. an algebraic error): nothing to evaluate
             return np.zeros(np.shape(x)[1:]), np.zeros(np.shape(x))
         inside, dx, dy, r, re, im, ut = self._local(x)
-        value, grad = np.zeros(np.shape(x)[1:]), np.zeros(np.shape(x))
+        shape = np.shape(x)[1:]
         psi, dpr, _ = self._cutoff(r)
-        value[inside] = self.A * psi * ut
-        grad[0][inside] = self.A * (dpr * ut * dx - 1.5 * psi * im)
-        grad[1][inside] = self.A * (dpr * ut * dy - 1.5 * psi * re)
+        radial = dpr * ut
+        value = self._placed(inside, self.A * psi * ut, shape)
+        grad = np.empty((2, *shape)) if inside is None else np.zeros((2, *shape))
+        self._placed(inside, self.A * (radial * dx - 1.5 * psi * im), shape, grad[0])
+        self._placed(inside, self.A * (radial * dy - 1.5 * psi * re), shape, grad[1])
         return value, grad
 
     # --- the cut-off ψ(r) = 1 - S(r/R), S(s) = s⁵(126 - 420 s + 540 s² - 315 s³ + 70 s⁴) ---
@@ -291,48 +297,68 @@ class Problem(ProblemBase):
         return np.hypot(dx, dy), np.arctan2(np.abs(dy), dx)
 
     def _local(self, x: np.ndarray):
-        """Points inside the support r < R: mask, dx, dy, r, Re √z, Im √z, ũ."""
+        """The points inside the support r < R (a mask; None: all of them), and dx, dy, r, Re √z,
+        Im √z, ũ flat over those points, or over all points where most are inside (a compress
+        costs more than evaluating the few outside, which ``_placed`` sets to +0.0).
+        ``r = √(dx² + dy²)``, not ``hypot`` (docs/evidence/design-measurements.md#distance-by-square-root):
+        ``√(fl(dx²)) = |dx|`` exactly, so ``ũ`` stays 0 on the contact part."""
         x = np.asarray(x, dtype=float)
         dx, dy = x[0] - self.x0, np.abs(x[1])
-        r = np.hypot(dx, dy)
+        r = np.sqrt(dx * dx + dy * dy)
         inside = r < self.R
-        dx, dy, r = dx[inside], dy[inside], r[inside]
-        re = np.sqrt(np.maximum(r + dx, 0.0) / 2.0)
-        im = np.sqrt(np.maximum(r - dx, 0.0) / 2.0)
+        count = np.count_nonzero(inside)
+        if 2 * count > inside.size:  # evaluated everywhere
+            inside = None if count == inside.size else inside.ravel()
+            dx, dy, r = dx.ravel(), dy.ravel(), r.ravel()
+        else:
+            dx, dy, r = dx[inside], dy[inside], r[inside]
+        re = np.sqrt(np.maximum(r + dx, 0.0) * 0.5)
+        im = np.sqrt(np.maximum(r - dx, 0.0) * 0.5)
         ut = -im * (3.0 * re * re - im * im)
         return inside, dx, dy, r, re, im, ut
 
-    def u(self, x: np.ndarray) -> np.ndarray:
-        """u = A ψ(r) ũ(r, θ), ũ = -r^{3/2} sin(3θ/2)."""
-        inside, _, _, r, _, _, ut = self._local(x)
-        out = np.zeros(np.shape(x)[1:])
-        out[inside] = self.A * self.psi(r) * ut
+    @staticmethod
+    def _placed(
+        inside: np.ndarray | None, values: np.ndarray, shape: tuple[int, ...], out: np.ndarray | None = None
+    ) -> np.ndarray:
+        """``values`` at the points ``inside`` marks (all if None), ``+0.0`` at the others; into
+        ``out`` (zeros where ``inside`` is False) if given.  ``values`` holds either the points
+        inside or all points (``_local``)."""
+        if inside is not None and values.shape == inside.shape:  # all points (flat): +0.0 outside
+            values, inside = np.where(inside, values, 0.0), None
+        if out is not None:
+            out[... if inside is None else inside] = values.reshape(shape) if inside is None else values
+            return out
+        if inside is None:
+            return values.reshape(shape)
+        out = np.zeros(shape)
+        out[inside] = values
         return out
+
+    def u(self, x: np.ndarray) -> np.ndarray:
+        """u = A ψ(r) ũ(r, θ), ũ = -r^{3/2} sin(3θ/2) (+0.0 everywhere for A = 0)."""
+        if self.A == 0.0:
+            return np.zeros(np.shape(x)[1:])
+        inside, _, _, r, _, _, ut = self._local(x)
+        return self._placed(inside, self.A * self.psi(r) * ut, np.shape(x)[1:])
 
     def grad_u(self, x: np.ndarray) -> np.ndarray:
         """∇u = A ((ψ'/r) ũ (dx, dy) + ψ ∇ũ), stacked as shape (2, ...)."""
-        inside, dx, dy, r, re, im, ut = self._local(x)
-        out = np.zeros(np.shape(x))
-        psi, dpr, _ = self._cutoff(r)
-        out[0][inside] = self.A * (dpr * ut * dx - 1.5 * psi * im)
-        out[1][inside] = self.A * (dpr * ut * dy - 1.5 * psi * re)
-        return out
+        return self.u_and_grad_u(x)[1] if self.A != 0.0 else np.zeros(np.shape(x))
 
     def minus_laplace_u(self, x: np.ndarray) -> np.ndarray:
         """-Δu = -A (2 ψ' ∂_r ũ + ũ (ψ'' + ψ'/r)), using Δũ = 0 and r ∂_r ũ = (3/2) ũ."""
         inside, _, _, r, _, _, ut = self._local(x)
-        out = np.zeros(np.shape(x)[1:])
         _, dpr, d2 = self._cutoff(r, second=True)
-        out[inside] = -self.A * ut * (3.0 * dpr + d2 + dpr)
-        return out
+        return self._placed(inside, -self.A * ut * (3.0 * dpr + d2 + dpr), np.shape(x)[1:])
 
     def f(self, x: np.ndarray) -> np.ndarray:
-        """Right-hand side f = -Δu + c u."""
+        """Right-hand side f = -Δu + c u (+0.0 everywhere for A = 0)."""
+        if self.A == 0.0:
+            return np.zeros(np.shape(x)[1:])
         inside, _, _, r, _, _, ut = self._local(x)
-        out = np.zeros(np.shape(x)[1:])
         psi, dpr, d2 = self._cutoff(r, second=True)
-        out[inside] = self.A * ut * (-4.0 * dpr - d2 + self.c * psi)
-        return out
+        return self._placed(inside, self.A * ut * (-4.0 * dpr - d2 + self.c * psi), np.shape(x)[1:])
 
 
 # --- problems with simple data and a closed-form solution (stability atlas, degenerate contact) ---

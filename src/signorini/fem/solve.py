@@ -4,6 +4,7 @@ warm start, or any solver route of ``signorini.solvers``."""
 from __future__ import annotations
 
 import logging
+import time
 
 import numpy as np
 
@@ -22,12 +23,34 @@ def cascade_start(disc: DiscreteProblem, solver: str = "direct", **options) -> n
     nodes; None below ``CASCADE_MIN_N`` (the cascade solves cold there).  What
     ``solve_discrete(..., warm_start="cascade")`` starts from, and what the work-precision
     study hands other solvers as the same initial guess."""
+    return _cascade(disc, solver, options)[0]
+
+
+def _cascade(disc: DiscreteProblem, solver: str, options: dict) -> tuple[np.ndarray | None, dict | None]:
+    """``cascade_start``'s warm start and what its levels cost: the coarse mesh's ``N``, the seconds
+    of building, solving (its own cascade included) and interpolating, the coarse solve's V-cycles
+    and work units where its route counts them (in the coarse mesh's units and in the fine
+    mesh's: scaled by the ratio of the operators' stored entries), and the coarser levels'
+    (``cascade``)."""
     Nc = disc.N // CASCADE_FACTOR
     if Nc < CASCADE_MIN_N:
-        return None
+        return None, None
+    t0 = time.perf_counter()
     coarse = build(disc.problem, Nc, disc.diagonal)
-    uc = solve_discrete(coarse, solver, "cascade", **options).u
-    return interpolate_fk(Nc, disc.diagonal, uc, disc.mesh.p)
+    result = solve_discrete(coarse, solver, "cascade", **options)
+    start = interpolate_fk(Nc, disc.diagonal, result.u, disc.mesh.p)
+    cost = {"N": Nc, "seconds": time.perf_counter() - t0, "solve_s": result.wall_time_s}
+    if "work_units" in result.info:
+        ratio = coarse.A.nnz / disc.A.nnz
+        below = result.info.get("cascade") or {}
+        cost |= {
+            "v_cycles": result.info["v_cycles"],
+            "work_units": result.info["work_units"],
+            "work_units_fine": result.info["work_units"] * ratio + below.get("work_units_fine", 0.0) * ratio,
+        }
+    if result.info.get("cascade"):
+        cost["cascade"] = result.info["cascade"]
+    return start, cost
 
 
 def solve_discrete(
@@ -42,11 +65,16 @@ def solve_discrete(
         if isinstance(warm_start, str):
             if warm_start != "cascade":
                 raise ValueError(f"unknown warm start {warm_start!r}; use 'cascade', None or a vector")
-            warm_start = cascade_start(disc, solver, **options)
+            warm_start, cascade = _cascade(disc, solver, options)
             if warm_start is not None:
                 options.setdefault("warm_start_dilation", 0)
                 try:
-                    return solve(solver, disc.A, disc.b, disc.boundary, **options, warm_start=warm_start)
+                    result = solve(solver, disc.A, disc.b, disc.boundary, **options, warm_start=warm_start)
+                    result.info["cascade"] = cascade
+                    if "work_units" in result.info and "work_units_fine" in (cascade or {}):
+                        # the whole solve's work in this mesh's units
+                        result.info["work_units_total"] = result.info["work_units"] + cascade["work_units_fine"]
+                    return result
                 except NotConvergedError as err:
                     log.warning("N=%d: cascade start did not settle (%s); solving from the cold start", disc.N, err)
                     options.pop("warm_start_dilation", None)

@@ -247,6 +247,7 @@ class GalerkinHierarchy:
         # the fine operator in A's own pattern (explicit zeros kept), updated in place
         self.levels[0].A = sp.csr_matrix((A.data.copy(), A.indices, A.indptr), shape=A.shape)
         self.free = np.ones(A.shape[0], dtype=bool)  # A itself: every node free
+        self.cycles = 0  # V-cycles applied (``__call__``)
         self._factor_coarsest()
 
     @property
@@ -256,6 +257,14 @@ class GalerkinHierarchy:
 
     def operator_complexity(self) -> float:
         return sum(level.A.nnz for level in self.levels) / self.levels[0].A.nnz
+
+    def cycle_work(self) -> float:
+        """The work of one V-cycle in fine-grid work units (one unit: a product with the fine
+        operator, its stored entries): per level but the coarsest, a Gauss–Seidel sweep each way and
+        the residual (three passes over ``A_l``), the restriction and the prolongation; on the
+        coarsest, the two triangular solves of its dense factor (``n_c²`` entries)."""
+        entries = sum(3 * level.A.nnz + level.P.nnz + level.R.nnz for level in self.levels[:-1])
+        return (entries + self.levels[-1].A.shape[0] ** 2) / self.levels[0].A.nnz
 
     def _factor_coarsest(self) -> None:
         coarsest = self.levels[-1].A.toarray()
@@ -299,6 +308,7 @@ class GalerkinHierarchy:
         self._factor_coarsest()
 
     def __call__(self, r: np.ndarray) -> np.ndarray:
+        self.cycles += 1
         if len(self.levels) == 1:
             return self._coarse(r)
         return self._cycle(0, r)
@@ -387,6 +397,8 @@ class MultigridSystems:
         self.hierarchy = GalerkinHierarchy(A, options["amg"], options["max_coarse"], options.get("grid"))
         self.amg, self.setup_s, self.update_s = options["amg"], time.perf_counter() - t0, 0.0
         self.cg_total = 0
+        self.products = 0  # products with the fine operator (CG's and the residual checks')
+        self.work = 0.0  # fine-grid work units of the Newton steps (``GalerkinHierarchy.cycle_work``)
         self.last: dict = {}
 
     def _refine(self, rhs: np.ndarray, x: np.ndarray, free: np.ndarray) -> tuple[np.ndarray, int]:
@@ -394,10 +406,12 @@ class MultigridSystems:
         At, iterations = self.hierarchy.matrix, 0
         for _ in range(REFINEMENTS):
             floor = FLOOR_FACTOR * np.finfo(float).eps * np.where(free, abs_product(self.A, np.abs(x)), 0.0).max()
+            self.products += 2  # |A| |x| and the residual
             if np.abs(rhs - At @ x).max() <= floor:
                 break
             x, k, _ = pcg(At, rhs, x, self.hierarchy, self.tol, self.max_cg_iter)
             iterations += k
+            self.products += k + 1
         return x, iterations
 
     def __call__(self, free: np.ndarray, accurate: bool) -> np.ndarray:
@@ -408,6 +422,7 @@ class MultigridSystems:
         t0 = time.perf_counter()
         self.hierarchy.update(free)
         self.update_s += time.perf_counter() - t0
+        cycles, products = self.hierarchy.cycles, self.products
         rhs = np.where(free, self.b, 0.0)
         x, iterations, ratio = np.zeros_like(rhs), 0, 0.0  # D b = 0: u = 0 (Ã is definite here)
         if rhs.any():
@@ -416,12 +431,22 @@ class MultigridSystems:
             rtol, reduction = (self.tol, None) if accurate else (self.inner_rtol, STEP_REDUCTION)
             At, start = self.hierarchy.matrix, np.where(free, self.x, 0.0)
             x, iterations, ratio = pcg(At, rhs, start, self.hierarchy, rtol, self.max_cg_iter, reduction, self.tol)
+            self.products += iterations + 1
         if accurate:
             x, more = self._refine(rhs, x, free)
             iterations += more
         self.x = x
         self.cg_total += iterations
-        self.last = {"cg_iterations": iterations, "energy_residual": ratio, "accurate": accurate}
+        cycles, products = self.hierarchy.cycles - cycles, self.products - products
+        work = products + cycles * self.hierarchy.cycle_work()
+        self.work += work
+        self.last = {
+            "cg_iterations": iterations,
+            "energy_residual": ratio,
+            "accurate": accurate,
+            "v_cycles": cycles,
+            "work_units": work,
+        }
         return x
 
     def counters(self) -> dict:
@@ -436,6 +461,9 @@ class MultigridSystems:
             "setup_s": self.setup_s,
             "galerkin_update_s": self.update_s,
             "cg_iterations": self.cg_total,
+            "v_cycles": self.hierarchy.cycles,
+            "work_units": self.work,
+            "work_unit_entries": int(self.hierarchy.levels[0].A.nnz),
             "tol": self.tol,
             "inner_rtol": self.inner_rtol,
         }

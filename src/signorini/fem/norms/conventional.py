@@ -25,6 +25,7 @@ norms of ``fem.norms.true``; ``fem.norms.evaluate.evaluate_named_norms`` takes a
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from functools import reduce
@@ -34,6 +35,7 @@ import numpy as np
 
 from signorini.fem.boundary import boundary_rule
 from signorini.fem.derivatives import u_and_grad_u
+from signorini.fem.mesh import triangles_meeting_disc
 from signorini.fem.norms.conventions import Conventions
 from signorini.fem.norms.families import BOUNDARY, MAX, NormDefinition, define, magnitude, part
 from signorini.fem.norms.names import NormName, UnknownNormError, norm_name
@@ -125,30 +127,33 @@ class PowerCache:
         return power_from_squarings(int(p), square)
 
 
+@functools.cache
 def _reference_rule(quadrature: str) -> tuple[np.ndarray, np.ndarray, int | None]:
-    """Reference points/weights; for Stroud rules also which vertex role is collapsed."""
+    """Reference points/weights (read-only: computed once per process); for Stroud rules also
+    which vertex role is collapsed."""
     if quadrature == "dunavant8":
         X, W = dunavant8()
-        return X, W, None
-    s, t, w = stroud_conical(4)
-    # collapsed vertex is local vertex 0: barycentrics (1 - s, s (1 - t), s t)
-    X = np.vstack([s * (1.0 - t), s * t])
-    role = {"stroud4_right": 0, "stroud4_acute1": 1, "stroud4_acute2": 2}[quadrature]
-    return X, w / 2.0, role
+        role = None
+    else:
+        s, t, w = stroud_conical(4)
+        # collapsed vertex is local vertex 0: barycentrics (1 - s, s (1 - t), s t)
+        X, W = np.vstack([s * (1.0 - t), s * t]), w / 2.0
+        role = {"stroud4_right": 0, "stroud4_acute1": 1, "stroud4_acute2": 2}[quadrature]
+    X.flags.writeable = W.flags.writeable = False
+    return X, W, role
 
 
 def _rolled_t(p: np.ndarray, t: np.ndarray, role: int) -> np.ndarray:
     """The triangles' vertices rotated so that local vertex 0 is the right-angle vertex
     (role 0) or the next (role 1) / second-next (role 2) counter-clockwise."""
-    # right angle: the vertex with the largest angle, i.e. the smallest dot product of its edges
-    dots = []
-    for k in range(3):
-        a, b, c = p[:, t[k]], p[:, t[(k + 1) % 3]], p[:, t[(k + 2) % 3]]
-        dots.append(np.sum((b - a) * (c - a), axis=0))
-    right = np.argmin(np.abs(np.array(dots)) / 1.0, axis=0)
+    # right angle: the vertex with the largest angle, i.e. the smallest |dot product| of its edges;
+    # at vertex k the edges to the next two vertices: ±(e01·e02), (−e01)·e12, (−e02)·(−e12)
+    v0, v1, v2 = p[:, t[0]], p[:, t[1]], p[:, t[2]]
+    e01, e02, e12 = v1 - v0, v2 - v0, v2 - v1
+    dots = [e01[0] * e02[0] + e01[1] * e02[1], e12[0] * e01[0] + e12[1] * e01[1], e02[0] * e12[0] + e02[1] * e12[1]]
+    right = np.argmin(np.abs(np.array(dots)), axis=0)
     # counter-clockwise orientation of (t0, t1, t2)
-    a, b, c = p[:, t[0]], p[:, t[1]], p[:, t[2]]
-    ccw = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) > 0
+    ccw = e01[0] * e02[1] - e01[1] * e02[0] > 0
     tt = np.where(ccw, t, t[[0, 2, 1]])
     right = np.where(ccw, right, np.array([0, 2, 1])[right])
     start = (right + role) % 3
@@ -165,9 +170,10 @@ def triangle_rule(p: np.ndarray, t: np.ndarray, quadrature: str) -> tuple[np.nda
 
 
 def p1_at_points(
-    p: np.ndarray, t: np.ndarray, u_h: np.ndarray, X: np.ndarray
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Points, ``u_h``, ``∇u_h`` and ``|det J|`` at reference points ``X`` (2, q) of every triangle.
+    p: np.ndarray, t: np.ndarray, u_h: np.ndarray, X: np.ndarray, points: bool = True
+) -> tuple[np.ndarray | None, np.ndarray, np.ndarray, np.ndarray]:
+    """Points, ``u_h``, ``∇u_h`` and ``|det J|`` at reference points ``X`` (2, q) of every triangle
+    (the points None if not ``points``).
 
     The affine P1 map written out (barycentrics λ = (1 - ξ - η, ξ, η)): scikit-fem's
     ``CellBasis`` does the same in general but builds (3, 2, elements, q) basis arrays, which
@@ -177,7 +183,7 @@ def p1_at_points(
     """
     lam = np.vstack([1.0 - X[0] - X[1], X[0], X[1]])  # (3, q)
     v = p[:, t]  # (2, 3, elements)
-    x = np.einsum("dke,kq->deq", v, lam)
+    x = np.einsum("dke,kq->deq", v, lam) if points else None
     value = u_h[t].T @ lam  # (elements, q)
     j00, j01 = v[0, 1] - v[0, 0], v[0, 2] - v[0, 0]
     j10, j11 = v[1, 1] - v[1, 0], v[1, 2] - v[1, 0]
@@ -185,6 +191,31 @@ def p1_at_points(
     d1, d2 = u_h[t[1]] - u_h[t[0]], u_h[t[2]] - u_h[t[0]]  # ∂u_h/∂ξ, ∂u_h/∂η
     grad = np.stack([(j11 * d1 - j10 * d2) / det, (-j01 * d1 + j00 * d2) / det])  # J^{-T} ∇̂u_h
     return x, value, grad[:, :, None], np.abs(det)
+
+
+def exact_at(
+    problem: Problem, p: np.ndarray, t: np.ndarray, X: np.ndarray, meet: np.ndarray | None, gradient: bool
+) -> tuple[np.ndarray, np.ndarray | None]:
+    """``u`` (and ``∇u`` if ``gradient``) at the reference points ``X`` (2, q) of the triangles ``t``:
+    evaluated on the triangles ``meet`` marks (all if None), ``+0.0`` on the others (outside the
+    problem's ``support``, where ``u`` and ``∇u`` are ``+0.0``), so the values are the ones an
+    evaluation everywhere gives, bit for bit, and the points of the other triangles are never formed."""
+    lam = np.vstack([1.0 - X[0] - X[1], X[0], X[1]])
+    tm = t if meet is None else t[:, meet]
+    x = np.einsum("dke,kq->deq", p[:, tm], lam)  # the points of p1_at_points
+    if gradient:
+        u, du = u_and_grad_u(problem, x)
+    else:  # problem.u: the same operations as u_and_grad_u's value
+        u, du = problem.u(x), None
+    if meet is None:
+        return u, du
+    full = np.zeros((t.shape[1], X.shape[1]))
+    full[meet] = u
+    if du is None:
+        return full, None
+    dfull = np.zeros((2, t.shape[1], X.shape[1]))
+    dfull[:, meet] = du
+    return full, dfull
 
 
 def element_points(which: str) -> np.ndarray:
@@ -256,19 +287,19 @@ def _error_field(
     cache: dict[str, tuple] = {}
 
     t = mesh.t if elements is None else mesh.t[:, elements]
+    support = problem.support()
+    meet = None if support is None else triangles_meeting_disc(mesh.p, t, support)
 
-    def error_at(x: np.ndarray, uh: np.ndarray, duh: np.ndarray, gradient: bool) -> tuple:
-        if not gradient:  # problem.u: the same operations as u_and_grad_u's value
-            return problem.u(x) - uh, None
-        u, du = u_and_grad_u(problem, x)
-        return u - uh, du - duh
+    def error_at(tr: np.ndarray, X: np.ndarray, gradient: bool) -> tuple:
+        _, uh, duh, det = p1_at_points(mesh.p, tr, u_h, X, points=False)
+        u, du = exact_at(problem, mesh.p, tr, X, meet, gradient)
+        return u - uh, None if du is None else du - duh, det
 
     def at_quadrature(gradient: bool) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
         key = "quadrature" if gradient or "quadrature" in cache else "values"
         if key not in cache:
             X, W, tq = triangle_rule(mesh.p, t, conv.quadrature)
-            x, uh, duh, det = p1_at_points(mesh.p, tq, u_h, X)
-            cache[key] = error_at(x, uh, duh, gradient)
+            *cache[key], det = error_at(tq, X, gradient)
             cache["dx"] = det[:, None] * W[None, :]
         return (*cache[key], cache["dx"])
 
@@ -277,8 +308,7 @@ def _error_field(
             return at_quadrature(gradient)[:2]
         key = which if gradient or which in cache else f"{which} values"
         if key not in cache:
-            x, uh, duh, _ = p1_at_points(mesh.p, t, u_h, element_points(which))
-            pe, pde = error_at(x, uh, duh, gradient)
+            pe, pde, _ = error_at(t, element_points(which), gradient)
             if which == "all":
                 e, de, _ = at_quadrature(gradient)
                 pe = np.concatenate([pe, e], axis=-1)
@@ -341,6 +371,11 @@ def integer_power(base: np.ndarray, q: float) -> np.ndarray:
     return power_from_squarings(int(q), square)
 
 
+def weighted_sum(values: np.ndarray, weights: np.ndarray | float) -> float:
+    """``Σ weights · values``: the dot product of the flattened arrays (one pass, no temporary)."""
+    return float(np.dot(values.ravel(), np.broadcast_to(weights, values.shape).ravel()))
+
+
 def scaled_p_sum(parts: list[np.ndarray], p: float, weights: np.ndarray | float = 1.0) -> float:
     """(Σ weights · Σ_parts |x|^p)^{1/p}, computed as ``s · (Σ weights · Σ |x/s|^p)^{1/p}`` with the
     power of two ``s = power_scale``: the value of the plain formula where that is finite and
@@ -348,8 +383,8 @@ def scaled_p_sum(parts: list[np.ndarray], p: float, weights: np.ndarray | float 
     ``p``, since correctly rounded powers commute with exact scaling), the right one elsewhere."""
     magnitudes = [np.abs(x) for x in parts]
     scale = _scale_of(max((float(np.max(a, initial=0.0)) for a in magnitudes), default=0.0))
-    total = sum(integer_power(a / scale, p) for a in magnitudes)
-    return float(np.sum(total * weights) ** (1.0 / p) * scale)
+    total = reduce(np.add, [integer_power(a / scale, p) for a in magnitudes])
+    return weighted_sum(total, weights) ** (1.0 / p) * scale
 
 
 def field_p_sum(f: ErrorField, names: tuple[str, ...], p: float) -> float:
@@ -358,8 +393,8 @@ def field_p_sum(f: ErrorField, names: tuple[str, ...], p: float) -> float:
     (``PowerCache``)."""
     scale = _scale_of(max(f.powers.magnitude(f, name)[1] for name in names))
     f.powers.enter(names, scale)
-    total = sum(f.powers.power(f, name, scale, p) for name in names)
-    return float(np.sum(total * f.dx) ** (1.0 / p) * scale)
+    total = reduce(np.add, [f.powers.power(f, name, scale, p) for name in names])
+    return weighted_sum(total, f.dx) ** (1.0 / p) * scale
 
 
 def boundary_part_norm(f: ErrorField, name: str) -> float:
@@ -433,9 +468,10 @@ def _compute(field: ErrorField, norms: dict[str, NormDefinition]) -> dict[str, f
     return values
 
 
-# triangles per evaluation chunk: bounds its error field and shared powers
-# (docs/evidence/design-measurements.md#chunk-sizes)
-CHUNK_ELEMENTS = 1 << 16
+# triangles per evaluation chunk: bounds its error field and shared powers, and keeps the arrays of a
+# chunk in the processor's cache (docs/evidence/design-measurements.md#chunk-sizes); numpy, not a
+# compiled kernel (docs/evidence/design-measurements.md#compiled-kernels)
+CHUNK_ELEMENTS = 1 << 13
 
 
 def _reduction(norm: NormDefinition) -> tuple[str, float]:

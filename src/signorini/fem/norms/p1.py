@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from signorini.fem.mesh import boundary_edges
 from signorini.fem.norms.conventions import Conventions
 from signorini.fem.norms.families import BOUNDARY, GRADIENT_PARTS, MAX, SQUARES, NormDefinition, define, magnitude
 from signorini.fem.norms.names import NormName, norm_name
@@ -106,7 +107,7 @@ class _P1Data:
 
     def boundary(self) -> tuple[float, float]:
         """‖v‖_{L²(∂Ω)} (exact: ∫_e v² = |e| (a² + ab + b²)/3) and |v|_{H¹(∂Ω)} (∂_t v constant per edge)."""
-        facets = self.mesh.facets[:, self.mesh.boundary_facets()]
+        facets = boundary_edges(self.mesh)
         a, b = self.w[facets[0]], self.w[facets[1]]
         length = np.linalg.norm(self.mesh.p[:, facets[1]] - self.mesh.p[:, facets[0]], axis=0)
         l2 = math.sqrt(float(np.sum(length * (a * a + a * b + b * b) / 3.0)))

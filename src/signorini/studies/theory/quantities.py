@@ -35,6 +35,7 @@ from skfem.refdom import RefTri
 
 from signorini.fem.assembly import CHUNK_ELEMENTS, INTORDER, p1_values, quadrature_chunks, system_matrix
 from signorini.fem.derivatives import u_and_grad_u
+from signorini.fem.mesh import boundary_nodes
 from signorini.fem.problem import Problem
 
 if TYPE_CHECKING:
@@ -53,13 +54,14 @@ def ritz_rhs(problem: Problem, mesh: MeshTri, chunk: int = CHUNK_ELEMENTS) -> np
 
     The package's 16-point degree-8 rule on every triangle, over chunks of at most ``chunk``
     triangles (bounded memory at N = 4001); ``u`` and ``∇u`` are evaluated once per quadrature
-    point, and the P1 gradients, constant on a triangle, once per triangle.
+    point, and the P1 gradients, constant on a triangle, once per triangle; the triangles outside
+    the problem's ``support`` (where ``u`` and ``∇u`` are ``+0.0``) add nothing and are left out.
     """
     X, _ = get_quadrature(RefTri, INTORDER)
     values = np.stack(p1_values(X))  # (shape function, q)
     n = mesh.p.shape[1]
     b = np.zeros(n)
-    for t, x, dx, inv in quadrature_chunks(mesh, chunk):
+    for t, x, dx, inv in quadrature_chunks(mesh, chunk, support=problem.support()):
         u, gu = u_and_grad_u(problem, x)
         flux = np.stack([np.sum(gu[d] * dx, axis=1) for d in range(2)])  # ∫_T ∇u, (2, E)
         mass = (u * dx) @ values.T  # ∫_T u φ_k, (E, 3)
@@ -148,7 +150,7 @@ def supercloseness(
 
 def _boundary_loop(mesh: MeshTri) -> np.ndarray:
     """Boundary vertices of the unit square in counter-clockwise order, starting at (0, 0)."""
-    nodes = mesh.boundary_nodes()
+    nodes = boundary_nodes(mesh)
     x, y = mesh.p[0, nodes], mesh.p[1, nodes]
     # arc-length parameter along bottom, right, top, left edges
     s = np.where(y <= 1e-12, x, np.where(x >= 1 - 1e-12, 1 + y, np.where(y >= 1 - 1e-12, 3 - x, 4 - y)))
