@@ -15,6 +15,7 @@ import math
 import numpy as np
 import pytest
 from helpers import ROOT
+from helpers import same_bits as _same_bits
 from numpy.polynomial import Polynomial
 
 from signorini.fem.problem import (
@@ -482,3 +483,24 @@ def test_outside_its_support_the_problem_is_exactly_positive_zero():
         assert zero.support()[1] == 0.0  # the empty disc: +0.0 everywhere
         for values in (zero.f(x), zero.u(x), zero.grad_u(x), *zero.u_and_grad_u(x)):
             assert np.all(values == 0.0) and not np.signbit(values).any()
+
+
+def test_u_grad_u_and_f_do_not_depend_on_the_points_evaluated_with_them():
+    """Where most points are inside the support ``u`` is evaluated at every point, where few are only
+    inside (a compress), where all are without a mask: each point's values are the same bits in
+    every case."""
+    problem = Problem(x0=0.47, R=0.3, A=7.0, c=2.0)
+    rng = np.random.default_rng(11)
+    angle, radius = rng.uniform(0.0, np.pi, 4000), 0.3 * np.sqrt(rng.uniform(0.0, 1.6, 4000))
+    x = np.array([0.47 + radius * np.cos(angle), radius * np.sin(angle)])  # about 60 % inside
+    inside = np.hypot(x[0] - 0.47, x[1]) < 0.3
+    subsets = [np.arange(4000), np.flatnonzero(inside), np.r_[np.flatnonzero(~inside), np.flatnonzero(inside)[:50]]]
+    subsets += [np.array([k]) for k in range(0, 4000, 397)]
+    whole = (problem.u(x), problem.grad_u(x), problem.f(x), *problem.u_and_grad_u(x))
+    for subset in subsets:
+        part = (problem.u(x[:, subset]), problem.grad_u(x[:, subset]), problem.f(x[:, subset]),
+                *problem.u_and_grad_u(x[:, subset]))
+        for a, b in zip(whole, part, strict=True):
+            assert _same_bits(np.ascontiguousarray(a[..., subset]), b)
+    x3 = x[:, :3960].reshape(2, 60, 66)  # a (2, elements, q) array: the shape the norms pass
+    assert _same_bits(problem.u(x3).ravel(), whole[0][:3960])

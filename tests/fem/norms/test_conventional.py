@@ -394,6 +394,10 @@ def test_chunked_evaluation_equals_whole_field(chunk):
     from signorini.fem.discrete import build
     from signorini.fem.norms.conventional import evaluate_norms
     from signorini.fem.problem import Problem
+
+    class Everywhere(Problem):  # the same problem without its support: u evaluated at every point
+        def support(self) -> None:
+            return None
     from signorini.fem.solve import solve_discrete
 
     problem = Problem()
@@ -434,6 +438,10 @@ def test_every_norm_scales_with_the_amplitude(amplitude):
     from signorini.fem.discrete import build
     from signorini.fem.norms.conventional import evaluate_norms
     from signorini.fem.problem import Problem
+
+    class Everywhere(Problem):  # the same problem without its support: u evaluated at every point
+        def support(self) -> None:
+            return None
     from signorini.fem.solve import solve_discrete
 
     names = ["L2", "L4", "L16", "L32", "Linf", "W14", "W116", "W1inf", "H1", "H12", "L4plus", "L4minus"]
@@ -478,6 +486,10 @@ def test_the_norms_of_many_chunks_hold_one_chunks_arrays_at_a_time():
     from signorini.fem.discrete import build
     from signorini.fem.norms.conventional import evaluate_norms
     from signorini.fem.problem import Problem
+
+    class Everywhere(Problem):  # the same problem without its support: u evaluated at every point
+        def support(self) -> None:
+            return None
     from signorini.fem.solve import solve_discrete
 
     peaks = {}
@@ -520,3 +532,29 @@ def test_the_point_sets_of_the_maxima():
     assert element_points("vertices").shape == (2, 3) and element_points("midpoints").shape == (2, 3)
     both = np.hstack([element_points("vertices"), element_points("midpoints")])
     np.testing.assert_array_equal(element_points("all"), both)
+
+
+@pytest.mark.parametrize("diagonal", ["sw_ne", "nw_se"])
+@pytest.mark.parametrize("jitter", [0.0, 0.3])
+def test_leaving_out_the_triangles_outside_the_support_changes_no_bit(diagonal, jitter, rng):
+    """``u`` evaluated only on the triangles that meet its support gives every norm the bits of the
+    evaluation everywhere: on the paper's problem, an unseen one (off-centre, small support) and
+    ``u ≡ 0`` (an algebraic error's norms), under the paper's conventions and others, with a
+    ``u_h`` that is not ``0`` outside the support."""
+    from signorini.fem.norms.conventional import evaluate_norms
+    from signorini.fem.problem import Problem
+
+    class Everywhere(Problem):  # the same problem without its support: u evaluated at every point
+        def support(self) -> None:
+            return None
+
+    mesh = friedrichs_keller(27, diagonal, jitter=jitter, seed=3)
+    names = ["L2", "L3", "L4", "L16", "Linf", "W12", "W14", "W116", "W1inf", "H1", "H12", "L4plus", "L4minus"]
+    convs = [Conventions(), Conventions(quadrature="stroud4_acute1", linf_points="all", w1p_form="gradient")]
+    for problem in (Problem(), Problem(x0=0.37, R=0.21, A=3.0, c=2.0), Problem().vanishing()):
+        u_h = Problem().u(mesh.p) + 1e-3 * rng.standard_normal(mesh.p.shape[1])
+        assert problem.support() is not None
+        for conv in convs:
+            got = evaluate_norms(problem, mesh, u_h, names, conv, chunk=300)
+            expected = evaluate_norms(Everywhere(**problem.as_dict()), mesh, u_h, names, conv, chunk=300)
+            assert {k: float(v).hex() for k, v in got.items()} == {k: float(v).hex() for k, v in expected.items()}
