@@ -78,7 +78,9 @@ def build_cold(target: str, keep: bool = False) -> dict:
         env = {**os.environ, "PYTHONPATH": str(clone / "src")}
         snakemake = Path(sys.executable).with_name("snakemake")
         load0, t0 = os.getloadavg()[0], time.perf_counter()
-        proc = subprocess.run([str(snakemake), "-c2", target], cwd=clone, env=env, capture_output=True, text=True)
+        proc = subprocess.run(
+            [str(snakemake), "-c2", target], cwd=clone, env=env, capture_output=True, text=True, encoding="utf-8"
+        )
         wall = time.perf_counter() - t0
         record = {"wall_s": wall, "exit_code": proc.returncode, "load1": [load0, os.getloadavg()[0]]}
         if proc.returncode:
