@@ -323,3 +323,20 @@ def test_work_units_and_v_cycles_are_counted_and_bounded_on_a_mesh_sequence():
         totals[N] = (info["v_cycles"], info["work_units_total"])
     assert max(cycles for cycles, _ in totals.values()) <= 40
     assert max(work for _, work in totals.values()) <= 2.0 * min(work for _, work in totals.values())
+
+
+@pytest.mark.parametrize(("family", "params"), [("union_jack", {}), ("graded", {"grading": 2.0}), ("delaunay", {})])
+def test_on_other_mesh_families_the_route_takes_classical_amg_and_gives_the_direct_solution(family, params):
+    """A matrix that is not on a Friedrichs–Keller grid (alternating diagonals, a graded or an
+    unstructured mesh, ``fem.mesh_families``) gets classical AMG, and the solve says so (``grid``
+    None); the solution and the contact set are the direct route's."""
+    from signorini.fem.assembly import assemble
+    from signorini.fem.mesh_families import build_mesh
+
+    mesh = build_mesh(family, 24, **params)
+    A, b = assemble(mesh, Problem())
+    direct = active_set_solve(A, b, boundary_nodes(mesh))
+    mg = multigrid_solve(A, b, boundary_nodes(mesh))
+    assert mg.info["grid"] is None and fk_grid(sp.csr_matrix(A)) is None
+    assert np.abs(mg.u - direct.u).max() <= 1e-12 * np.abs(direct.u).max()
+    assert np.array_equal(mg.active, direct.active) and mg.certificate.ok
