@@ -504,3 +504,16 @@ def test_u_grad_u_and_f_do_not_depend_on_the_points_evaluated_with_them():
             assert _same_bits(np.ascontiguousarray(a[..., subset]), b)
     x3 = x[:, :3960].reshape(2, 60, 66)  # a (2, elements, q) array: the shape the norms pass
     assert _same_bits(problem.u(x3).ravel(), whole[0][:3960])
+
+
+def test_one_point_of_shape_two_gives_scalars_equal_to_the_same_point_in_an_array():
+    """``x`` of shape (2,), inside the support, outside it and on the contact part: ``u`` and ``f``
+    of shape (), ``∇u`` of shape (2,), the bits of the point evaluated in a (2, 1) array."""
+    problem = Problem(x0=0.47, R=0.3, A=7.0, c=2.0)
+    for point in ([0.5, 0.1], [0.9, 0.9], [0.6, 0.0]):
+        x = np.array(point)
+        u, grad = problem.u_and_grad_u(x)
+        assert u.shape == problem.f(x).shape == () and grad.shape == problem.grad_u(x).shape == (2,)
+        u1, grad1 = problem.u_and_grad_u(x[:, None])
+        assert _same_bits(u.reshape(1), u1) and _same_bits(grad.reshape(2, 1), grad1)
+        assert _same_bits(problem.f(x).reshape(1), problem.f(x[:, None]))

@@ -73,9 +73,7 @@ def graded(N: int, grading: float = 2.0, x0: float = 0.5) -> MeshTri:
     h = 1.0 / N
     mesh = friedrichs_keller(N)
     while True:
-        v = mesh.p[:, mesh.t]
-        longest = np.max([np.hypot(*(v[:, k] - v[:, (k + 1) % 3])) for k in range(3)], axis=0)
-        centroid = v.mean(axis=1)
+        longest, centroid = longest_edges(mesh), mesh.p[:, mesh.t].mean(axis=1)
         r = np.maximum(np.hypot(centroid[0] - x0, centroid[1]), h**grading)
         marked = np.flatnonzero(longest > np.sqrt(2.0) * h * r ** (1.0 - 1.0 / grading) * (1.0 + 1e-12))
         if not marked.size:
@@ -115,10 +113,15 @@ def delaunay(N: int, jitter: float = 0.25, seed: int = 0) -> MeshTri:
     return MeshTri(p, t[:, np.abs(area) > 1e-14 * h * h].astype(np.int32))
 
 
+def longest_edges(mesh: MeshTri) -> np.ndarray:
+    """The longest edge of each triangle."""
+    v = mesh.p[:, mesh.t]
+    return np.max([np.hypot(*(v[:, k] - v[:, (k + 1) % 3])) for k in range(3)], axis=0)
+
+
 def mesh_size(mesh: MeshTri) -> float:
     """``h``: the longest edge of the mesh."""
-    v = mesh.p[:, mesh.t]
-    return float(max(np.hypot(*(v[:, k] - v[:, (k + 1) % 3])).max() for k in range(3)))
+    return float(longest_edges(mesh).max())
 
 
 def min_angle(mesh: MeshTri) -> float:

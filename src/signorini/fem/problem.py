@@ -231,14 +231,13 @@ class Problem(ProblemBase):
         give zeros of either sign)."""
         if self.A == 0.0:  # u ≡ 0 (the norms of a P1 function, e.g. an algebraic error): nothing to evaluate
             return np.zeros(np.shape(x)[1:]), np.zeros(np.shape(x))
-        inside, dx, dy, r, re, im, ut = self._local(x)
+        where, dx, dy, r, re, im, ut = self._local(x)
         shape = np.shape(x)[1:]
         psi, dpr, _ = self._cutoff(r)
         radial = dpr * ut
-        value = self._placed(inside, self.A * psi * ut, shape)
-        grad = np.empty((2, *shape)) if inside is None else np.zeros((2, *shape))
-        self._placed(inside, self.A * (radial * dx - 1.5 * psi * im), shape, grad[0])
-        self._placed(inside, self.A * (radial * dy - 1.5 * psi * re), shape, grad[1])
+        value, grad = self._placed(where, self.A * psi * ut, shape), np.empty((2, *shape))
+        self._placed(where, self.A * (radial * dx - 1.5 * psi * im), shape, grad[0, ...])
+        self._placed(where, self.A * (radial * dy - 1.5 * psi * re), shape, grad[1, ...])
         return value, grad
 
     # --- the cut-off ψ(r) = 1 - S(r/R), S(s) = s⁵(126 - 420 s + 540 s² - 315 s³ + 70 s⁴) ---
@@ -297,9 +296,10 @@ class Problem(ProblemBase):
         return np.hypot(dx, dy), np.arctan2(np.abs(dy), dx)
 
     def _local(self, x: np.ndarray):
-        """The points inside the support r < R (a mask; None: all of them), and dx, dy, r, Re √z,
-        Im √z, ũ flat over those points, or over all points where most are inside (a compress
-        costs more than evaluating the few outside, which ``_placed`` sets to +0.0).
+        """``where`` the points inside the support r < R are (the mask, None if all of them, and
+        whether the values are over every point), and dx, dy, r, Re √z, Im √z, ũ flat over the
+        points inside, or over every point where most are inside (a compress costs more than
+        evaluating the few outside, which ``_placed`` sets to +0.0).
         ``r = √(dx² + dy²)``, not ``hypot`` (docs/evidence/design-measurements.md#distance-by-square-root):
         ``√(fl(dx²)) = |dx|`` exactly, so ``ũ`` stays 0 on the contact part."""
         x = np.asarray(x, dtype=float)
@@ -307,31 +307,34 @@ class Problem(ProblemBase):
         r = np.sqrt(dx * dx + dy * dy)
         inside = r < self.R
         count = np.count_nonzero(inside)
-        if 2 * count > inside.size:  # evaluated everywhere
-            inside = None if count == inside.size else inside.ravel()
+        dense = 2 * count > inside.size
+        if dense:
             dx, dy, r = dx.ravel(), dy.ravel(), r.ravel()
         else:
             dx, dy, r = dx[inside], dy[inside], r[inside]
+        where = (None if count == inside.size else inside, dense)
         re = np.sqrt(np.maximum(r + dx, 0.0) * 0.5)
         im = np.sqrt(np.maximum(r - dx, 0.0) * 0.5)
         ut = -im * (3.0 * re * re - im * im)
-        return inside, dx, dy, r, re, im, ut
+        return where, dx, dy, r, re, im, ut
 
     @staticmethod
     def _placed(
-        inside: np.ndarray | None, values: np.ndarray, shape: tuple[int, ...], out: np.ndarray | None = None
+        where: tuple[np.ndarray | None, bool], values: np.ndarray, shape: tuple[int, ...], out: np.ndarray | None = None
     ) -> np.ndarray:
-        """``values`` at the points ``inside`` marks (all if None), ``+0.0`` at the others; into
-        ``out`` (zeros where ``inside`` is False) if given.  ``values`` holds either the points
-        inside or all points (``_local``)."""
-        if inside is not None and values.shape == inside.shape:  # all points (flat): +0.0 outside
-            values, inside = np.where(inside, values, 0.0), None
-        if out is not None:
-            out[... if inside is None else inside] = values.reshape(shape) if inside is None else values
+        """``values`` at the points inside the support (``_local``'s ``where``), ``+0.0`` at the
+        others, as an array of ``shape`` (into ``out`` if given)."""
+        inside, dense = where
+        if inside is None or dense:
+            full = values.reshape(shape) if inside is None else np.where(inside, values.reshape(shape), 0.0)
+            if out is None:
+                return full
+            out[...] = full
             return out
-        if inside is None:
-            return values.reshape(shape)
-        out = np.zeros(shape)
+        if out is None:
+            out = np.zeros(shape)
+        else:
+            out.fill(0.0)
         out[inside] = values
         return out
 
@@ -339,26 +342,26 @@ class Problem(ProblemBase):
         """u = A ψ(r) ũ(r, θ), ũ = -r^{3/2} sin(3θ/2) (+0.0 everywhere for A = 0)."""
         if self.A == 0.0:
             return np.zeros(np.shape(x)[1:])
-        inside, _, _, r, _, _, ut = self._local(x)
-        return self._placed(inside, self.A * self.psi(r) * ut, np.shape(x)[1:])
+        where, _, _, r, _, _, ut = self._local(x)
+        return self._placed(where, self.A * self.psi(r) * ut, np.shape(x)[1:])
 
     def grad_u(self, x: np.ndarray) -> np.ndarray:
         """∇u = A ((ψ'/r) ũ (dx, dy) + ψ ∇ũ), stacked as shape (2, ...)."""
-        return self.u_and_grad_u(x)[1] if self.A != 0.0 else np.zeros(np.shape(x))
+        return self.u_and_grad_u(x)[1]
 
     def minus_laplace_u(self, x: np.ndarray) -> np.ndarray:
         """-Δu = -A (2 ψ' ∂_r ũ + ũ (ψ'' + ψ'/r)), using Δũ = 0 and r ∂_r ũ = (3/2) ũ."""
-        inside, _, _, r, _, _, ut = self._local(x)
+        where, _, _, r, _, _, ut = self._local(x)
         _, dpr, d2 = self._cutoff(r, second=True)
-        return self._placed(inside, -self.A * ut * (3.0 * dpr + d2 + dpr), np.shape(x)[1:])
+        return self._placed(where, -self.A * ut * (3.0 * dpr + d2 + dpr), np.shape(x)[1:])
 
     def f(self, x: np.ndarray) -> np.ndarray:
         """Right-hand side f = -Δu + c u (+0.0 everywhere for A = 0)."""
         if self.A == 0.0:
             return np.zeros(np.shape(x)[1:])
-        inside, _, _, r, _, _, ut = self._local(x)
+        where, _, _, r, _, _, ut = self._local(x)
         psi, dpr, d2 = self._cutoff(r, second=True)
-        return self._placed(inside, self.A * ut * (-4.0 * dpr - d2 + self.c * psi), np.shape(x)[1:])
+        return self._placed(where, self.A * ut * (-4.0 * dpr - d2 + self.c * psi), np.shape(x)[1:])
 
 
 # --- problems with simple data and a closed-form solution (stability atlas, degenerate contact) ---

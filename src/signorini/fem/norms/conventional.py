@@ -169,6 +169,11 @@ def triangle_rule(p: np.ndarray, t: np.ndarray, quadrature: str) -> tuple[np.nda
     return X, W, t if role is None else _rolled_t(p, t, role)
 
 
+def _barycentric(X: np.ndarray) -> np.ndarray:
+    """The barycentric coordinates (3, q) ``(1 − ξ − η, ξ, η)`` of reference points ``X`` (2, q)."""
+    return np.vstack([1.0 - X[0] - X[1], X[0], X[1]])
+
+
 def p1_at_points(
     p: np.ndarray, t: np.ndarray, u_h: np.ndarray, X: np.ndarray, points: bool = True
 ) -> tuple[np.ndarray | None, np.ndarray, np.ndarray, np.ndarray]:
@@ -181,7 +186,7 @@ def p1_at_points(
     Tested against
     ``CellBasis.interpolate`` in tests/fem/norms/test_conventional.py.
     """
-    lam = np.vstack([1.0 - X[0] - X[1], X[0], X[1]])  # (3, q)
+    lam = _barycentric(X)  # (3, q)
     v = p[:, t]  # (2, 3, elements)
     x = np.einsum("dke,kq->deq", v, lam) if points else None
     value = u_h[t].T @ lam  # (elements, q)
@@ -200,9 +205,8 @@ def exact_at(
     evaluated on the triangles ``meet`` marks (all if None), ``+0.0`` on the others (outside the
     problem's ``support``, where ``u`` and ``∇u`` are ``+0.0``), so the values are the ones an
     evaluation everywhere gives, bit for bit, and the points of the other triangles are never formed."""
-    lam = np.vstack([1.0 - X[0] - X[1], X[0], X[1]])
     tm = t if meet is None else t[:, meet]
-    x = np.einsum("dke,kq->deq", p[:, tm], lam)  # the points of p1_at_points
+    x = np.einsum("dke,kq->deq", p[:, tm], _barycentric(X))  # the points of p1_at_points
     if gradient:
         u, du = u_and_grad_u(problem, x)
     else:  # problem.u: the same operations as u_and_grad_u's value
@@ -284,15 +288,16 @@ def _error_field(
     problem: Problem, mesh: MeshTri, u_h: np.ndarray, conv: Conventions, needed: set[str], elements: np.ndarray | None
 ) -> ErrorField:
     """``error_field`` of the evaluations ``needed`` (``_evaluations``)."""
-    cache: dict[str, tuple] = {}
+    cache: dict[str, tuple | np.ndarray | None] = {}
 
     t = mesh.t if elements is None else mesh.t[:, elements]
-    support = problem.support()
-    meet = None if support is None else triangles_meeting_disc(mesh.p, t, support)
 
     def error_at(tr: np.ndarray, X: np.ndarray, gradient: bool) -> tuple:
+        if "meet" not in cache:  # the triangles that meet the support, once, where a cell evaluation needs them
+            support = problem.support()
+            cache["meet"] = None if support is None else triangles_meeting_disc(mesh.p, t, support)
         _, uh, duh, det = p1_at_points(mesh.p, tr, u_h, X, points=False)
-        u, du = exact_at(problem, mesh.p, tr, X, meet, gradient)
+        u, du = exact_at(problem, mesh.p, tr, X, cache["meet"], gradient)
         return u - uh, None if du is None else du - duh, det
 
     def at_quadrature(gradient: bool) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
