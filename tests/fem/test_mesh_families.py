@@ -98,3 +98,34 @@ def test_the_convention_norms_of_the_interpolation_error_converge_on_every_famil
     for name, order in (("L2", 2.0), ("W12", 1.0)):
         rate = np.log(coarse[name] / fine[name]) / np.log(h0 / h1)
         assert rate > order - 0.6, (name, rate)
+
+
+def test_a_scene_mesh_block_is_checked_against_its_family():
+    from signorini.fem.mesh_families import check_mesh_spec, family_parameters, paper_mesh
+
+    assert check_mesh_spec({}) == ("friedrichs_keller", {})
+    assert check_mesh_spec({"family": "graded", "grading": 3}) == ("graded", {"grading": 3})
+    assert family_parameters("delaunay") == {"jitter": 0.25, "seed": 0}
+    assert paper_mesh({}) and paper_mesh({"family": "friedrichs_keller"})
+    assert not paper_mesh({"family": "friedrichs_keller", "jitter": 0.1}) and not paper_mesh({"family": "union_jack"})
+    for spec, message in [
+        ({"family": "delaunay", "grading": 2.0}, "no parameter 'grading'"),
+        ({"family": "delaunay", "seed": 1.5}, "seed=1.5 must be a int"),
+        ({"family": "graded", "grading": True}, "grading=True"),
+        ({"family": "friedrichs_keller", "diagonal": "nw_se"}, "no parameter 'diagonal'"),
+        ({"family": "voronoi"}, "unknown mesh family"),
+    ]:
+        with pytest.raises(ValueError, match=message):
+            check_mesh_spec(spec)
+
+
+def test_describe_mesh_counts_edges_angles_and_whether_the_free_point_is_a_vertex():
+    from signorini.fem.mesh_families import describe_mesh
+
+    even, odd = describe_mesh(friedrichs_keller(4), [(0.5, 0.0)]), describe_mesh(friedrichs_keller(5), [(0.5, 0.0)])
+    assert even["points_are_vertices"] == [True] and odd["points_are_vertices"] == [False]
+    assert (odd["n_vertices"], odd["n_triangles"]) == (36, 50)
+    assert odd["longest_edge"] == pytest.approx(np.sqrt(2) / 5) and odd["shortest_edge"] == pytest.approx(0.2)
+    assert odd["min_angle_deg"] == pytest.approx(45.0)
+    plain = describe_mesh(union_jack(4))
+    assert plain["n_triangles"] == 32 and "points_are_vertices" not in plain

@@ -553,3 +553,38 @@ def test_a_scene_of_another_problem_kind_takes_only_its_own_parameters():
     assert message.startswith("scenes.smoke.problem.c: value > 0 needs c > 0"), message
     message = refused(with_smoke(problem={"kind": "full_contact", "A": 1.0, "c": 1.0, "R": 0.3}))
     assert message.startswith("scenes.smoke.problem.R: full_contact problem: unknown parameter 'R'"), message
+
+
+@pytest.mark.parametrize(
+    ("mesh", "fragments"),
+    [
+        ({"family": "voronoi"}, ["scenes.smoke.mesh.family: 'voronoi' is not allowed", "delaunay"]),
+        ({"family": "delaunay", "grading": 2}, ["scenes.smoke.mesh: mesh family 'delaunay' has no parameter"]),
+        ({"family": "graded", "grading": "steep"}, ["scenes.smoke.mesh.grading: 'steep' is not a number"]),
+        ({"family": "delaunay", "seed": 0.5}, ["scenes.smoke.mesh: mesh parameter seed=0.5 must be a int"]),
+    ],
+)
+def test_a_mesh_block_names_a_family_and_its_parameters(mesh, fragments):
+    message = refused_with(("smoke", "mesh"), mesh)
+    assert all(f in message for f in fragments), message
+
+
+def test_the_schemas_mesh_families_are_the_codes():
+    from signorini.fem.mesh_families import MESH_FAMILIES
+
+    schema = yaml.safe_load(SCHEMA.read_text(encoding="utf-8"))
+    assert schema["$defs"]["scene"]["properties"]["mesh"]["properties"]["family"]["enum"] == list(MESH_FAMILIES)
+
+
+def test_scene_defaults_merge_a_mesh_block_of_the_same_family_only():
+    from signorini.pipeline.config import apply_scene_defaults
+
+    config = {
+        "scene_defaults": {"mesh": {"family": "delaunay", "seed": 2}},
+        "scenes": {"a": {"N": [8]}, "b": {"N": [8], "mesh": {"family": "delaunay", "jitter": 0.1}},
+                   "c": {"N": [8], "mesh": {"family": "graded"}}},
+    }
+    apply_scene_defaults(config)
+    a, b, c = (config["scenes"][k]["mesh"] for k in "abc")
+    assert a == {"family": "delaunay", "seed": 2} and b == {"family": "delaunay", "seed": 2, "jitter": 0.1}
+    assert c == {"family": "graded"}

@@ -25,6 +25,7 @@ if shlex.quote(sys.executable) != sys.executable and "conda" not in _deploy:
 # handling of Ctrl-C stays as it is
 os.environ.update(SIGNORINI_JOB_INTERRUPT="quiet")
 
+from signorini.fem.mesh_families import paper_mesh
 from signorini.fem.norms.names import true_name
 from signorini.published import FIGURE3_NORMS, TABLE1_NORMS, TABLE2_NORMS
 from signorini.pipeline import paths, resources
@@ -139,6 +140,19 @@ def scene_of(wildcards):
 def scene_param(key):
     """A params function: the job's scene's ``key`` (problem, diagonal, conventions, ...)."""
     return lambda wc: scene_of(wc)[key]
+
+
+def family_mesh(scene=None):
+    """An input function: the mesh artifact of the job's mesh when its scene (``scene``, else the
+    job's) names a mesh family, none for the paper's Friedrichs-Keller mesh."""
+
+    def mesh_of(wildcards):
+        name = scene or wildcards.scene
+        if paper_mesh(scene_of(name)["mesh"]):
+            return []
+        return PATHS["mesh_npz"].format(scene=name, N=wildcards.N)
+
+    return mesh_of
 
 
 # every Snakemake process parses this file (a cluster: each job): the direct imports of unchanged

@@ -8,6 +8,7 @@ rule theory_quantities:
     input:
         system=rules.discretise.output.npz,
         solution=rules.solve.output.npz,
+        mesh=family_mesh(),
         code=code("theory_quantities"),
     output:
         json=PATHS["theory_json"],
@@ -23,6 +24,7 @@ rule theory_quantities:
     params:
         problem=scene_param("problem"),
         diagonal=scene_param("diagonal"),
+        mesh=scene_param("mesh"),
     script:
         "../scripts/theory_quantities.py"
 

@@ -1,4 +1,5 @@
-"""The discrete Signorini problem (S_h) on a Friedrichs–Keller mesh (``fem.solve`` solves it).
+"""The discrete Signorini problem (S_h) on a Friedrichs–Keller mesh or any other triangulation of
+the unit square (``fem.solve`` solves it).
 
 ``(u_h, v_h - u_h)_{H¹} ≥ (f, v_h - u_h)`` for all ``v_h ∈ K_h = {v_h ∈ V_h : v_h ≥ 0 on ∂Ω}``;
 with P1 elements this is the QP ``min ½ uᵀAu - bᵀu`` s.t. ``u_i ≥ 0`` at boundary nodes.
@@ -12,8 +13,8 @@ import numpy as np
 import scipy.sparse as sp
 from skfem import MeshTri
 
-from signorini.fem.assembly import fk_stencil_matrix, load_vector
-from signorini.fem.mesh import DEFAULT_DIAGONAL, fk_boundary_nodes, friedrichs_keller
+from signorini.fem.assembly import CHUNK_ELEMENTS, fk_stencil_matrix, load_vector, system_matrix
+from signorini.fem.mesh import DEFAULT_DIAGONAL, boundary_nodes, fk_boundary_nodes, friedrichs_keller
 from signorini.fem.problem import Problem
 
 
@@ -30,11 +31,16 @@ class DiscreteProblem:
     boundary: np.ndarray
 
 
-def build(problem: Problem, N: int, diagonal: str = DEFAULT_DIAGONAL) -> DiscreteProblem:
+def build(problem: Problem, N: int, diagonal: str = DEFAULT_DIAGONAL, mesh: MeshTri | None = None) -> DiscreteProblem:
     """Mesh and assemble (S_h) for ``N`` cells per side: ``A`` written from the exact stencil of the
     Friedrichs–Keller mesh (``assembly.fk_stencil_matrix``: scikit-fem's matrix without the round-off
     of the mesh's coordinates) and ``b`` streamed over the triangles that meet the support of ``f``
-    (bit for bit scikit-fem's), in O(#vertices) memory."""
+    (bit for bit scikit-fem's), in O(#vertices) memory.  Given another ``mesh`` (a family of
+    ``fem.mesh_families`` with parameter ``N``), ``A`` and ``b`` are scikit-fem's assembly on it,
+    in chunks of triangles, and the constrained nodes its vertices on ∂Ω."""
+    if mesh is not None:
+        A, b = system_matrix(mesh, problem.c, chunk=CHUNK_ELEMENTS), load_vector(mesh, problem)
+        return DiscreteProblem(problem, int(N), diagonal, mesh, A, b, boundary_nodes(mesh))
     mesh = friedrichs_keller(N, diagonal)
     A, b = fk_stencil_matrix(mesh, int(N), problem.c), load_vector(mesh, problem)
     return DiscreteProblem(problem, int(N), diagonal, mesh, A, b, fk_boundary_nodes(int(N)))

@@ -22,13 +22,16 @@ boundary from them):
 =====================  ==========================================================================
 
 ``mesh_size`` is the ``h`` the rates are measured against (the longest edge); ``min_angle`` the
-quality of a mesh (its smallest angle).
+quality of a mesh (its smallest angle).  A scene names its family and the family's parameters
+(``mesh: {family: delaunay, seed: 1}``); ``check_mesh_spec`` checks them against the family's
+function, so a new family is one function here and its name in the configuration schema.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import TYPE_CHECKING
+import inspect
+from collections.abc import Callable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -110,7 +113,7 @@ def delaunay(N: int, jitter: float = 0.25, seed: int = 0) -> MeshTri:
     t = Delaunay(p.T).simplices.T
     v = p[:, t]
     area = (v[0, 1] - v[0, 0]) * (v[1, 2] - v[1, 0]) - (v[0, 2] - v[0, 0]) * (v[1, 1] - v[1, 0])
-    return MeshTri(p, t[:, np.abs(area) > 1e-14 * h * h].astype(np.int32))
+    return MeshTri(p, np.ascontiguousarray(t[:, np.abs(area) > 1e-14 * h * h], dtype=np.int32))
 
 
 def longest_edges(mesh: MeshTri) -> np.ndarray:
@@ -143,8 +146,65 @@ MESH_FAMILIES: dict[str, Callable[..., MeshTri]] = {
 }
 
 
+FRIEDRICHS_KELLER = "friedrichs_keller"  # the paper's family, every scene's unless it says otherwise
+
+
+def family_parameters(family: str) -> dict[str, Any]:
+    """{parameter: default} of a family's function beyond ``N`` (``friedrichs_keller``'s diagonal,
+    jitter and seed included)."""
+    if family not in MESH_FAMILIES:
+        raise ValueError(f"unknown mesh family {family!r}; choose one of {sorted(MESH_FAMILIES)}")
+    parameters = list(inspect.signature(MESH_FAMILIES[family]).parameters.values())[1:]
+    return {par.name: par.default for par in parameters}
+
+
+def check_mesh_spec(spec: Mapping[str, Any]) -> tuple[str, dict[str, Any]]:
+    """``(family, params)`` of a scene's ``mesh`` block, each parameter one the family's function
+    takes, of its default's type (an integer where it is a float); a ``ValueError`` naming the
+    parameter otherwise.  The Friedrichs–Keller diagonal is the scene's own ``diagonal``, not a
+    parameter here."""
+    params = dict(spec)
+    family = params.pop("family", FRIEDRICHS_KELLER)
+    known = family_parameters(family)
+    if family == FRIEDRICHS_KELLER:
+        known.pop("diagonal")
+    for name, value in params.items():
+        if name not in known:
+            raise ValueError(f"mesh family {family!r} has no parameter {name!r}; its parameters: {sorted(known)}")
+        default = known[name]
+        kinds = (int, float) if isinstance(default, float) else (type(default),)
+        if isinstance(value, bool) or not isinstance(value, kinds):
+            raise ValueError(f"mesh parameter {name}={value!r} must be a {type(default).__name__}, like its default")
+    return family, params
+
+
+def paper_mesh(spec: Mapping[str, Any]) -> bool:
+    """Whether a scene's ``mesh`` block names the paper's Friedrichs–Keller mesh (the family
+    without parameters: two integers define it, no artifact is needed)."""
+    family, params = check_mesh_spec(spec)
+    return family == FRIEDRICHS_KELLER and not params
+
+
 def build_mesh(family: str, N: int, **params) -> MeshTri:
     """The mesh of ``family`` (``MESH_FAMILIES``) with parameter ``N`` and the family's ``params``."""
     if family not in MESH_FAMILIES:
         raise ValueError(f"unknown mesh family {family!r}; choose one of {sorted(MESH_FAMILIES)}")
     return MESH_FAMILIES[family](N, **params)
+
+
+def describe_mesh(mesh: MeshTri, points: Sequence[tuple[float, float]] = ()) -> dict[str, Any]:
+    """What a reader of a mesh wants to know of it: vertices, triangles, the longest and shortest
+    edge, the smallest angle, and whether each of ``points`` (a problem's singular points, the free
+    point) is a vertex (``points_are_vertices``)."""
+    v = mesh.p[:, mesh.t]
+    edges = np.array([np.hypot(*(v[:, k] - v[:, (k + 1) % 3])) for k in range(3)])
+    info = {
+        "n_vertices": int(mesh.p.shape[1]),
+        "n_triangles": int(mesh.t.shape[1]),
+        "longest_edge": float(edges.max()),
+        "shortest_edge": float(edges.min()),
+        "min_angle_deg": min_angle(mesh),
+    }
+    if len(points):
+        info["points_are_vertices"] = [bool(np.hypot(mesh.p[0] - x, mesh.p[1] - y).min() <= 1e-12) for x, y in points]
+    return info

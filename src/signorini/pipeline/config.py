@@ -208,12 +208,13 @@ def apply_scene_defaults(config: dict) -> dict:
 
 def _same_kind(default: Mapping, given: Mapping) -> bool:
     """Whether two problem blocks are of one kind (``fem.problem.make_problem``; without a ``kind``
-    the default one); other mappings have none."""
-    if "kind" not in default and "kind" not in given:
-        return True
+    the default one), and two mesh blocks of one family (``fem.mesh_families``; without a
+    ``family`` the paper's); other mappings have neither."""
+    from signorini.fem.mesh_families import FRIEDRICHS_KELLER
     from signorini.fem.problem import DEFAULT_KIND
 
-    return default.get("kind", DEFAULT_KIND) == given.get("kind", DEFAULT_KIND)
+    same_kind = default.get("kind", DEFAULT_KIND) == given.get("kind", DEFAULT_KIND)
+    return same_kind and default.get("family", FRIEDRICHS_KELLER) == given.get("family", FRIEDRICHS_KELLER)
 
 
 def load_config(path: str | os.PathLike = DEFAULT_CONFIG) -> dict:
@@ -602,10 +603,22 @@ def _check_scene(where: str, scene: Mapping, limit: int, available: str, node: N
         _check_runtime(where, Ns, scene.get("norms", []), node)
     _check_problem(where, scene.get("problem", {}), Ns, _runs_conjugate_gradients(where, scene, Ns))
     _check_study_and_atlas(where, scene)
+    _check_mesh(where, scene.get("mesh") or {})
     try:
         Conventions(**scene.get("conventions", {}))
     except (ValueError, TypeError) as err:
         raise ConfigError(f"{where}.conventions: {err}") from None
+
+
+def _check_mesh(where: str, spec: Mapping) -> None:
+    """A scene's ``mesh`` block: a family of ``fem.mesh_families`` and parameters its function takes,
+    of their defaults' types."""
+    from signorini.fem.mesh_families import check_mesh_spec
+
+    try:
+        check_mesh_spec(spec)
+    except ValueError as err:
+        raise ConfigError(f"{where}.mesh: {err}") from None
 
 
 def _runs_conjugate_gradients(where: str, scene: Mapping, Ns: Sequence[int]) -> bool:

@@ -19,7 +19,11 @@ REFERENCE = "workflow/reference"
 _MESH = "results/{scene}/N{N}"
 
 PATHS = {
-    # the chain of every scene: discretise -> solve -> norm -> errors/eoc
+    # the chain of every scene: (mesh ->) discretise -> solve -> norm -> errors/eoc; the mesh
+    # stage runs for a scene that names a mesh family (studies.scene.mesh)
+    "mesh_npz": f"{_MESH}/mesh.npz",
+    "mesh_json": f"{_MESH}/mesh.json",
+    "mesh_vtu": f"{_MESH}/mesh.vtu",
     "system_npz": f"{_MESH}/system.npz",
     "system_json": f"{_MESH}/system.json",
     "solution_npz": f"{_MESH}/solution.npz",

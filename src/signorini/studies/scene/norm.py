@@ -131,6 +131,7 @@ def norms_stage(
             **({"quadrature_error": accuracy} if accuracy else {}),
             **({"algebraic_error": algebraic} if algebraic else {}),
             "diagonal": at.diagonal,
+            **({} if at.paper_mesh else {"mesh": dict(at.mesh_spec)}),
             "timings": {**timings, "note": TIMINGS_NOTE},
         }
         save_json(outputs[norm], infos[norm])

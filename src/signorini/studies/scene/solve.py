@@ -59,6 +59,7 @@ def solve_stage(
         "N": N,
         "h": at.h,
         "diagonal": diagonal,
+        **({} if at.paper_mesh else {"mesh": dict(at.mesh_spec)}),
         "problem": problem.as_dict(),
         "solver_requested": solver,
         "solver_options": dict(solver_options or {}),

@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from signorini.fem.mesh import friedrichs_keller, mesh_width
+from signorini.fem.mesh_families import FRIEDRICHS_KELLER, build_mesh, check_mesh_spec, mesh_size, paper_mesh
 from signorini.fem.problem import ExactProblem, make_problem
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz, npz_provenance
 from signorini.pipeline.integrity import table_defect
@@ -29,35 +31,76 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class SceneMesh:
-    """One mesh of a scene, what a per-mesh job works on: the scene's problem parameters, the
-    cells per side ``N`` and the diagonal of the Friedrichs–Keller mesh."""
+    """One mesh of a scene, what a per-mesh job works on: the scene's problem parameters, the mesh
+    parameter ``N`` (cells per side), the diagonal of the Friedrichs–Keller mesh and the scene's
+    ``mesh`` block (``fem.mesh_families``: the family and its parameters; none is the paper's
+    Friedrichs–Keller mesh).  The paper's mesh is built where it is needed (two integers define
+    it); any other is the ``mesh`` stage's artifact ``mesh_npz`` (built here when none is given)."""
 
     problem_params: Mapping
     N: int
     diagonal: str
+    mesh_spec: Mapping = field(default_factory=dict)
+    mesh_npz: str | None = None
 
     @classmethod
     def of_job(cls, job: Any) -> SceneMesh:
-        """From a Snakemake job object (``params.problem``, ``params.diagonal``, ``wildcards.N``)."""
-        return cls(dict(job.params.problem), int(job.wildcards.N), str(job.params.diagonal))
+        """From a Snakemake job object (``params.problem``, ``params.diagonal``, ``wildcards.N``, and
+        where the scene names a mesh family, ``params.mesh`` and ``input.mesh``)."""
+        spec = dict(getattr(job.params, "mesh", None) or {})
+        given = getattr(job.input, "mesh", None)
+        mesh_npz = str(given) if isinstance(given, (str, os.PathLike)) else None
+        return cls(dict(job.params.problem), int(job.wildcards.N), str(job.params.diagonal), spec, mesh_npz)
 
     @property
     def problem(self) -> ExactProblem:
         return make_problem(self.problem_params)
 
     @property
+    def family(self) -> str:
+        return check_mesh_spec(self.mesh_spec)[0]
+
+    @property
+    def paper_mesh(self) -> bool:
+        """Whether the mesh is the paper's Friedrichs–Keller mesh of ``N`` and the diagonal."""
+        return paper_mesh(self.mesh_spec)
+
+    @property
     def h(self) -> float:
-        return mesh_width(self.N)
+        """The ``h`` the rates are measured against: ``1/N`` on the paper's mesh (its legs), the
+        longest edge on any other (``fem.mesh_families.mesh_size``)."""
+        return mesh_width(self.N) if self.paper_mesh else self._family_mesh[1]
 
     def mesh(self) -> MeshTri:
-        return friedrichs_keller(self.N, self.diagonal)
+        return friedrichs_keller(self.N, self.diagonal) if self.paper_mesh else self._family_mesh[0]
+
+    def build_mesh(self) -> MeshTri:
+        """The mesh built from its definition (what the ``mesh`` stage writes)."""
+        if self.paper_mesh:
+            return friedrichs_keller(self.N, self.diagonal)
+        family, params = check_mesh_spec(self.mesh_spec)
+        if family == FRIEDRICHS_KELLER:
+            params["diagonal"] = self.diagonal
+        return build_mesh(family, self.N, **params)
+
+    @cached_property
+    def _family_mesh(self) -> tuple[MeshTri, float]:
+        """A family mesh and its ``h``: read from ``mesh_npz`` (checked), else built."""
+        if self.mesh_npz is None:
+            mesh = self.build_mesh()
+            return mesh, mesh_size(mesh)
+        return load_mesh(self.mesh_npz, self.N, self.family)
+
+    @property
+    def n_vertices(self) -> int:
+        return (self.N + 1) ** 2 if self.paper_mesh else int(self._family_mesh[0].p.shape[1])
 
     def solution(self, solution_npz: str | os.PathLike) -> dict[str, np.ndarray]:
         """The arrays of a solve artifact (``u``, ``lam``, ``active``), read once and checked against
         this mesh: a truncated file, a wrong length, another diagonal or another problem (the one
         the job that wrote it recorded) raises ``CorruptArtifactError``."""
         sol = load_npz(solution_npz)
-        u_h, n = sol["u"], (self.N + 1) ** 2
+        u_h, n = sol["u"], self.n_vertices
         if u_h.shape != (n,):
             raise CorruptArtifactError(f"{solution_npz}: u has shape {u_h.shape}, expected ({n},) for N={self.N}")
         if "diagonal" in sol and str(sol["diagonal"]) != self.diagonal:
@@ -73,6 +116,18 @@ class SceneMesh:
     def load_solution(self, solution_npz: str | os.PathLike) -> np.ndarray:
         """``u_h`` of this mesh from a solve artifact, checked (``solution``)."""
         return self.solution(solution_npz)["u"]
+
+
+def load_mesh(path: str | os.PathLike, N: int, family: str) -> tuple[MeshTri, float]:
+    """``(mesh, h)`` from a ``mesh`` archive, checked to hold ``family`` at ``N``."""
+    from skfem import MeshTri
+
+    d = load_npz(path)
+    if int(d["N"]) != int(N) or str(d["family"]) != family:
+        raise CorruptArtifactError(
+            f"{path}: holds the {d['family']} mesh of N={int(d['N'])}, not the {family} mesh of N={N}"
+        )
+    return MeshTri(d["p"], d["t"], sort_t=False), float(d["h"])
 
 
 def load_system(path: str | os.PathLike, N: int | None = None) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
@@ -123,16 +178,26 @@ def read_quadrature_error(path: str | os.PathLike, norm: str, N: int) -> dict:
 
 def read_errors(scene_N: Sequence[int], norm_jsons: Mapping[str, Sequence[str | os.PathLike]]) -> pd.DataFrame:
     """A DataFrame with columns ``N``, ``h`` and one column per norm (in the order of ``norm_jsons``),
-    read from the per-norm JSON artifacts; ``norm_jsons[name][k]`` belongs to ``scene_N[k]``."""
+    read from the per-norm JSON artifacts; ``norm_jsons[name][k]`` belongs to ``scene_N[k]``.  ``h``
+    is the mesh's as its norm artifacts record it (``SceneMesh.h``), the same in each of them."""
     import pandas as pd
 
     Ns = [int(N) for N in scene_N]
-    data: dict[str, list] = {"N": Ns, "h": [mesh_width(N) for N in Ns]}
+    data: dict[str, list] = {"N": Ns}
     for name, paths in norm_jsons.items():
         if len(paths) != len(Ns):
             raise ValueError(f"norm {name}: {len(paths)} artifacts for {len(Ns)} meshes")
         data[name] = [read_norm(path, name, N) for N, path in zip(Ns, paths, strict=True)]
-    return pd.DataFrame(data)
+    data["h"] = [_mesh_h([paths[k] for paths in norm_jsons.values()], N) for k, N in enumerate(Ns)]
+    return pd.DataFrame(data)[["N", "h", *norm_jsons]]
+
+
+def _mesh_h(paths: Sequence[str | os.PathLike], N: int) -> float:
+    """The ``h`` the norm artifacts of one mesh record, one value (``1/N`` without artifacts)."""
+    values = {float(load_json(path)["h"]) for path in paths}
+    if len(values) > 1:
+        raise CorruptArtifactError(f"the norm artifacts of N={N} record different mesh widths h: {sorted(values)}")
+    return values.pop() if values else mesh_width(N)
 
 
 def read_uncertainties(
