@@ -67,6 +67,7 @@ include: "workflow/rules/theory.smk"
 include: "workflow/rules/work_precision.smk"
 include: "workflow/rules/stability.smk"
 include: "workflow/rules/true_norms.smk"
+include: "workflow/rules/meshes.smk"
 include: "workflow/rules/report.smk"
 include: "workflow/rules/integrity.smk"
 

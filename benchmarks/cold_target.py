@@ -7,7 +7,7 @@ results, no Snakemake metadata; the clone's ``src`` first on the path), one targ
 Recorded per target: the wall time of the Snakemake call, its exit code, the 1-minute load before
 and after, and from the jobs' ``benchmark:`` files (Snakemake's, one per job) the jobs per rule
 group with the sums of their wall and CPU seconds and their largest resident memory.  The clone is
-removed afterwards unless ``--keep``.
+removed afterwards unless ``--keep`` (then its path is recorded, ``clone``: its outputs can be copied).
 
 Keys: ``targets[<target>] = {wall_s, exit_code, load1: [before, after], jobs, groups: {<group>:
 {jobs, wall_s, cpu_s, max_rss_gib}}, sum_wall_s, sum_cpu_s, longest: [[job, wall_s], ...]}``; the
@@ -34,6 +34,7 @@ GROUPS = (
     ("convention norms (one job per norm)", lambda name: name.startswith("norm_")),
     ("convention norms (per mesh)", lambda name: name == "norms"),
     ("theory quantities", lambda name: name == "theory"),
+    ("mesh generation", lambda name: name == "mesh"),
     ("discretise", lambda name: name == "discretise"),
     ("solve", lambda name: name == "solve"),
 )
@@ -85,6 +86,8 @@ def build_cold(target: str, keep: bool = False) -> dict:
         record = {"wall_s": wall, "exit_code": proc.returncode, "load1": [load0, os.getloadavg()[0]]}
         if proc.returncode:
             record["stderr_tail"] = proc.stderr.strip().splitlines()[-5:]
+        if keep:
+            record["clone"] = str(clone)
         return record | job_table(clone / "results")
     finally:
         if not keep:

@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 
 import yaml
-from helpers import SHIPPED_SCENES, TEST_SCENES, copy_repo, snakemake
+from helpers import MESHES_STUDY, SHIPPED_SCENES, TEST_SCENES, copy_repo, snakemake
 
 
 def build(dest: Path, targets: list[str]) -> Path:
@@ -29,6 +29,7 @@ def build(dest: Path, targets: list[str]) -> Path:
     path = repo / "workflow/config.yaml"
     config = yaml.safe_load(path.read_text(encoding="utf-8"))
     config["scenes"] = {name: config["scenes"][name] for name in SHIPPED_SCENES} | TEST_SCENES
+    config["meshes_study"] = MESHES_STUDY
     # the second case's EOC test reads its three finest EOCs: its four finest meshes give them
     # unchanged (each mesh is solved on its own), at two thirds of the jobs
     config["scenes"]["case2"]["N"] = config["scenes"]["case2"]["N"][-4:]

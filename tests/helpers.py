@@ -189,12 +189,24 @@ TEST_SCENES = {
                 {"name": "c_1e+06", "group": "reaction", "N": 9, "problem": {"c": 1e6}},
                 {"name": "N2", "group": "mesh", "N": 2, "solvers": ["active_set", "osqp"]},
                 {"name": "jitter", "group": "mesh", "N": 9, "jitter": 0.2, "solvers": ["active_set"]},
+                {"name": "delaunay", "group": "mesh", "N": 9, "mesh": {"family": "delaunay"},
+                 "solvers": ["active_set"]},
                 {"name": "f_zero", "group": "degenerate", "N": 9, "problem": {"A": 0.0}},
                 {"name": "bad_spd", "group": "bad_input", "N": 9, "corrupt": "non_spd", "solvers": ["active_set"]},
             ],
         },
     },
 }
+# a small mesh-family study (shipped: up to 1 M unknowns per family): the reference, a Delaunay family
+# of two seeds and a graded family
+_MESH_SCENE = {"N": [9, 17, 33], "norms": ["L4", "W14", "H12", "L4_true"], "solver": "active_set", "problem": PROBLEM}
+TEST_SCENES |= {
+    "meshes_fk": _MESH_SCENE,
+    "meshes_delaunay": {**_MESH_SCENE, "mesh": {"family": "delaunay", "seed": 0}},
+    "meshes_delaunay_seed1": {**_MESH_SCENE, "mesh": {"family": "delaunay", "seed": 1}},
+    "meshes_graded": {**_MESH_SCENE, "N": [8, 16], "mesh": {"family": "graded", "grading": 2.0}},
+}
+MESHES_STUDY = ["meshes_fk", "meshes_delaunay", "meshes_delaunay_seed1", "meshes_graded"]
 # shipped scenes the built copy keeps as they are: the second manufactured case is tested as shipped
 SHIPPED_SCENES = ("paper", "smoke", "case2")
 # every target of the built copy: the paper's outputs and true norms from the smoke scene, the three
@@ -209,6 +221,7 @@ BUILT_TARGETS = (
     "results/case2/eoc.csv",
     "true_norms",
     "fine",
+    "meshes",
 )
 
 

@@ -165,7 +165,8 @@ GLOSSARY_TERMS = (
     "failed", "skipped",
     # studies
     "algebraic_error", "theory_rates", "theory_extra", "cost_of_accuracy", "time_s", "wall_s", "time_ref", "ref_s",
-    "load1", "spread", "cond_max_dofs",
+    "load1", "spread", "cond_max_dofs", "meshes", "meshes_study", "meshes_rates", "slope_h", "order_n", "last_eoc",
+    "vs_expected", "vs_reference", "quasi_uniform", "mesh", "friedrichs_keller", "union_jack", "graded", "delaunay",
     # the workflow
     "scene_defaults", "figures_scene", "norm_jobs", "per_norm", "per_mesh", "solver_options", "paper", "smoke",
     "case2", "fine", "theory", "work_precision", "stability",

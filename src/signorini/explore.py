@@ -155,8 +155,11 @@ class Scene:
         return dict(self.solution_info(self.Ns[0])["problem"])
 
     def at(self, N: int) -> SceneMesh:
-        """The scene's mesh ``N`` as the pipeline's stages see it (``studies.scene.store``)."""
-        return SceneMesh(self.problem_params, int(N), self.diagonal)
+        """The scene's mesh ``N`` as the pipeline's stages see it (``studies.scene.store``): a mesh
+        family's from the mesh job's artifact, where the scene names one."""
+        spec = dict(self.solution_info(int(N)).get("mesh", {}))
+        mesh_npz = _path(self.root, "mesh_npz", self.name, N=N)
+        return SceneMesh(self.problem_params, int(N), self.diagonal, spec, str(mesh_npz) if spec else None)
 
     def solution(self, N: int) -> dict[str, np.ndarray]:
         """``solution.npz``, read through the store (checksum, size, diagonal and problem checked):
@@ -215,7 +218,6 @@ class Scene:
         solution with the scene's conventions (``fem.norms.evaluate.evaluate_named_norms``)."""
         import pandas as pd
 
-        from signorini.fem.mesh import mesh_width
         from signorini.fem.norms.evaluate import evaluate_named_norms
 
         rows = []
@@ -225,7 +227,7 @@ class Scene:
             if missing:
                 u_h = self.solution(N)["u"]
                 cached.update(evaluate_named_norms(self.problem, self.mesh(N), u_h, missing, self.conventions))
-            rows.append({"N": int(N), "h": mesh_width(int(N)), **{n: cached[n] for n in names}})
+            rows.append({"N": int(N), "h": self.at(N).h, **{n: cached[n] for n in names}})
         return pd.DataFrame(rows)
 
 

@@ -25,6 +25,7 @@ def _job(path: Path, wall: float, cpu: float, rss_mb: float) -> None:
         ("norm_L4", "convention norms (one job per norm)"),
         ("norms", "convention norms (per mesh)"),
         ("theory", "theory quantities"),
+        ("mesh", "mesh generation"),
         ("discretise", "discretise"),
         ("solve", "solve"),
         ("atlas_case", "other"),

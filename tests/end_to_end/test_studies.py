@@ -55,6 +55,42 @@ def test_theory_target_end_to_end(built_repo):
         assert (built_repo / "paper_figures" / name).stat().st_size > 0
 
 
+def test_meshes_target_end_to_end(built_repo):
+    """The small mesh-family study of the built copy: a mesh job per N of a family scene only, its
+    artifact read by the later stages (meshio reads its .vtu), the page with every section and a
+    verdict per family, the rates table's verdicts, a figure."""
+    import meshio
+
+    from signorini.pipeline.artifacts import load_json
+    from signorini.studies.scene.store import read_errors_csv
+
+    out = built_repo / "paper_figures"
+    md = (out / "meshes.md").read_text(encoding="utf-8")
+    for heading in ("## The meshes", "## Findings", "## Slopes against h", "## Orders against the unknowns",
+                    "## The contact set and condition (A_h)", "## The true norms' accuracy"):
+        assert heading in md, heading
+    assert md.count("(*measured*)") >= 1 + 4 + 4  # the headline, a verdict per family, (A_h) per family
+    rates = pd.read_csv(out / "meshes.csv")
+    assert set(rates["scene"]) == {"meshes_fk", "meshes_delaunay", "meshes_delaunay_seed1", "meshes_graded"}
+    assert set(rates["vs_expected"]) <= {"agrees", "faster", "slower"}
+    assert (rates.loc[rates["scene"] == "meshes_fk", "vs_reference"] == "same").all()
+    assert (out / "meshes_rates.png").stat().st_size > 10_000
+    assert not (built_repo / "results/meshes_fk/N9/mesh.npz").exists()  # the paper's mesh: no mesh job
+    info = load_json(built_repo / "results/meshes_graded/N16/mesh.json")
+    assert info["family"] == "graded" and info["n_vertices"] > 17**2
+    vtu = meshio.read(built_repo / "results/meshes_delaunay/N33/mesh.vtu")
+    assert len(vtu.points) == load_json(built_repo / "results/meshes_delaunay/N33/mesh.json")["n_vertices"]
+    errors = read_errors_csv(built_repo / "results/meshes_delaunay/errors.csv")
+    assert errors["h"].iloc[-1] == info_h(built_repo, "meshes_delaunay", 33)
+
+
+def info_h(repo, scene: str, N: int) -> float:
+    """The ``h`` a family mesh's artifact records: its longest edge."""
+    from signorini.pipeline.artifacts import load_json
+
+    return load_json(repo / f"results/{scene}/N{N}/mesh.json")["h"]
+
+
 def test_small_study_end_to_end(built_repo):
     """The small study of the built copy (N = 11, 21 of the smoke scene; active set and OSQP at two
     tolerances): the paper_figures outputs, the source scene's systems and solutions reused (not

@@ -194,8 +194,9 @@ def build_mesh(family: str, N: int, **params) -> MeshTri:
 
 def describe_mesh(mesh: MeshTri, points: Sequence[tuple[float, float]] = ()) -> dict[str, Any]:
     """What a reader of a mesh wants to know of it: vertices, triangles, the longest and shortest
-    edge, the smallest angle, and whether each of ``points`` (a problem's singular points, the free
-    point) is a vertex (``points_are_vertices``)."""
+    edge, the smallest diameter of a triangle (its longest edge), the smallest angle, and whether
+    each of ``points`` (a problem's singular points, the free point) is a vertex
+    (``points_are_vertices``)."""
     v = mesh.p[:, mesh.t]
     edges = np.array([np.hypot(*(v[:, k] - v[:, (k + 1) % 3])) for k in range(3)])
     info = {
@@ -203,6 +204,7 @@ def describe_mesh(mesh: MeshTri, points: Sequence[tuple[float, float]] = ()) -> 
         "n_triangles": int(mesh.t.shape[1]),
         "longest_edge": float(edges.max()),
         "shortest_edge": float(edges.min()),
+        "smallest_diameter": float(edges.max(axis=0).min()),
         "min_angle_deg": min_angle(mesh),
     }
     if len(points):

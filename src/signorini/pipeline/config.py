@@ -610,6 +610,17 @@ def _check_scene(where: str, scene: Mapping, limit: int, available: str, node: N
         raise ConfigError(f"{where}.conventions: {err}") from None
 
 
+def _check_meshes_study(names: Sequence[str], scenes: Mapping) -> None:
+    """The mesh-family study's scenes: configured, each once, at least two meshes each."""
+    for i, name in enumerate(names):
+        if name not in scenes:
+            raise ConfigError(f"meshes_study[{i}]: {name!r} is not a scene; configured: {', '.join(sorted(scenes))}")
+        if name in names[:i]:
+            raise ConfigError(f"meshes_study[{i}]: {name!r} is listed twice")
+        if len(scenes[name].get("N", [])) < 2:
+            raise ConfigError(f"meshes_study[{i}]: scene {name!r} needs two meshes or more for a rate")
+
+
 def _check_mesh(where: str, spec: Mapping) -> None:
     """A scene's ``mesh`` block: a family of ``fem.mesh_families`` and parameters its function takes,
     of their defaults' types."""
@@ -716,6 +727,7 @@ def check_config(config: dict, mem_limit_mb: int | None = None, node: NodeLimits
         check_scene_name("scenes", name)
         _check_scene(f"scenes.{name}", scene, limit, available, node)
     _check_figures_scene(config, scenes)
+    _check_meshes_study(config.get("meshes_study") or [], scenes)
     check_numbers(config)  # last: the checks above say more where a NaN is a tolerance or a parameter
 
 

@@ -111,6 +111,11 @@ FIGURES = {
     "free_point_error": _outputs("free_point_error", "pdf", "png"),
     # the findings of every study in one page
     "summary": _outputs("summary", "md"),
+    # Theorem 6.1's rates on the mesh families (studies.meshes): findings, rates, figure
+    "meshes_report": {
+        **_outputs("meshes", "md", "csv"),
+        **{f"rates_{k}": v for k, v in _outputs("meshes_rates", "pdf", "png").items()},
+    },
 }
 
 
@@ -157,6 +162,7 @@ TARGET_RULES = {
     "stability": Target(("stability_atlas",), "stability atlas", "snakemake -c2 stability"),
     "true_norms": Target(("true_tables", "free_point_error"), "true norms", "snakemake -c2 true_norms"),
     "fine": Target(("fine_tables", "eoc_against_h"), "Table 2 to h = 1/4001", "snakemake -c2 fine"),
+    "meshes": Target(("meshes_report",), "mesh families", "snakemake -c2 meshes"),
 }
 TARGETS = {name: target.rules for name, target in TARGET_RULES.items()}  # the rules each target renders
 
@@ -197,6 +203,7 @@ REPORT_PAGE_ENTRIES = {
     "theory": ReportPage(FIGURES["theory_report"]["md"], "theory", "Theory"),
     "work_precision": ReportPage(FIGURES["work_precision_report"]["md"], "work_precision", "Work precision"),
     "stability": ReportPage(FIGURES["stability_atlas"]["md"], "stability", "Stability"),
+    "meshes": ReportPage(FIGURES["meshes_report"]["md"], "meshes", "Theory", "Mesh families"),
 }
 REPORT_PAGES = {page: entry.source for page, entry in REPORT_PAGE_ENTRIES.items()}  # {page: its Markdown source}
 REPORT_SCENE_PAGE = f"{REPORT_DIR}/scene_{{scene}}.html"

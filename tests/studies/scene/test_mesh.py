@@ -65,3 +65,29 @@ def test_the_paper_mesh_needs_no_artifact():
     jittered = SceneMesh(PROBLEM, 7, "nw_se", {"family": "friedrichs_keller", "jitter": 0.2, "seed": 4})
     assert not jittered.paper_mesh
     np.testing.assert_array_equal(jittered.mesh().p, friedrichs_keller(7, "nw_se", 0.2, 4).p)
+
+
+def test_the_chain_on_a_mesh_artifact_gives_the_paper_meshs_values_where_the_meshes_coincide(tmp_path):
+    """``friedrichs_keller`` with ``jitter: 0.0`` is the paper's mesh read as an artifact and assembled
+    by scikit-fem: the solution and every norm, under the conventions and true, agree with the
+    paper's path to round-off."""
+    from signorini.studies.scene.norm import norms_stage
+    from signorini.studies.scene.solve import solve_stage
+
+    norms = ["L4", "Linf", "W14", "W1inf", "H12", "L4_true", "W1inf_true"]
+    values = []
+    for name, spec in (("paper", {}), ("artifact", {"family": "friedrichs_keller", "jitter": 0.0})):
+        d = tmp_path / name
+        d.mkdir()
+        at = SceneMesh(PROBLEM, 21, "sw_ne", spec)
+        if spec:
+            mesh_stage(at, d / "mesh.npz", d / "mesh.json", d / "mesh.vtu")
+            at = SceneMesh(PROBLEM, 21, "sw_ne", spec, str(d / "mesh.npz"))
+        assert at.paper_mesh == (name == "paper")
+        discretise_stage(at, d / "system.npz", d / "system.json")
+        solve_stage(at, d / "system.npz", "direct", d / "solution.npz", d / "solution.json")
+        infos = norms_stage(at, d / "solution.npz", {n: d / f"{n}.json" for n in norms}, {})
+        values.append({n: infos[n]["value"] for n in norms})
+    paper, artifact = values
+    for norm in norms:
+        assert artifact[norm] == pytest.approx(paper[norm], rel=1e-9), norm

@@ -49,6 +49,13 @@ def mesh_stage(
     write_vtu(out_vtu, mesh, {})
     log.info(
         "N=%d %s %s: %d vertices, %d triangles, h = %.3e, smallest angle %.1f°, built in %.2f s",
-        at.N, family, params, described["n_vertices"], described["n_triangles"], h, described["min_angle_deg"], build_s,
+        at.N,
+        family,
+        params,
+        described["n_vertices"],
+        described["n_triangles"],
+        h,
+        described["min_angle_deg"],
+        build_s,
     )
     return info

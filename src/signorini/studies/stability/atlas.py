@@ -53,6 +53,7 @@ class Case:
     solvers: tuple[str, ...] = ()
     reference: str | None = None  # scaling: compare u_h / A with this case's
     note: str = ""
+    mesh: Mapping = field(default_factory=dict)  # a mesh family and its parameters (fem.mesh_families)
 
     @property
     def expect(self) -> str:
@@ -60,7 +61,7 @@ class Case:
         return "error" if self.corrupt else "ok"
 
     def as_dict(self) -> dict:
-        return {**asdict(self), "problem": dict(self.problem), "solvers": list(self.solvers)}
+        return {**asdict(self), "problem": dict(self.problem), "solvers": list(self.solvers), "mesh": dict(self.mesh)}
 
 
 @dataclass(frozen=True)
@@ -185,14 +186,32 @@ def _parse_case(raw, at: str, base: Mapping, default_N: int, specs: Mapping, def
     jitter = float(raw.get("jitter", 0.0))
     if not 0.0 <= jitter < 0.5:
         raise AtlasConfigError(f"{at}.jitter: {jitter} must lie in [0, 0.5)")
+    mesh = _case_mesh(raw, at, jitter)
     solvers = tuple(raw.get("solvers") or default_solvers)
     unknown = [s for s in solvers if s not in specs]
     if unknown:
         raise AtlasConfigError(f"{at}.solvers: {unknown} are not columns of {at.rsplit('.cases', 1)[0]}.solvers")
     return Case(
         name, group, params, int(N), diagonal, jitter, int(raw.get("seed", 0)), corrupt, solvers,
-        raw.get("reference"), str(raw.get("note", "")),
+        raw.get("reference"), str(raw.get("note", "")), mesh,
     )
+
+
+def _case_mesh(raw: Mapping, at: str, jitter: float) -> dict:
+    """A case's ``mesh`` block (a family of ``fem.mesh_families`` and its parameters), checked;
+    ``jitter`` and ``seed`` of a case without one are the Friedrichs–Keller mesh's."""
+    from signorini.fem.mesh_families import check_mesh_spec
+
+    mesh = raw.get("mesh") or {}
+    if not isinstance(mesh, Mapping):
+        raise AtlasConfigError(f"{at}.mesh: must be a mapping (family and its parameters)")
+    try:
+        check_mesh_spec(mesh)
+    except ValueError as err:
+        raise AtlasConfigError(f"{at}.mesh: {err}") from None
+    if mesh and (jitter or "seed" in raw):
+        raise AtlasConfigError(f"{at}: jitter and seed belong in the mesh block when a case has one")
+    return dict(mesh)
 
 
 def parse_atlas(scene: Mapping, where: str = "scenes.stability") -> Atlas:

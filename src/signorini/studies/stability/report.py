@@ -27,6 +27,10 @@ def _case_line(case: Mapping, sub, norms: Sequence[str], info: Mapping) -> str:
     what = ", ".join(f"{k} = {v:g}" if isinstance(v, float) else f"{k} = {v}" for k, v in p.items())
     mesh = f"N = {case['N']}" + (f", {case['diagonal']}" if case["diagonal"] != DEFAULT_DIAGONAL else "")
     mesh += f", jitter {case['jitter']:g} h" if case["jitter"] else ""
+    if case.get("mesh"):
+        family = dict(case["mesh"])
+        name = family.pop("family", "friedrichs_keller").replace("_", "-")
+        mesh += f", {name} mesh" + "".join(f", {k} {v:g}" for k, v in family.items())
     head = f"- **{case['name']}** ({mesh}; {what}"
     head += f"; {CORRUPTIONS[case['corrupt']]})" if case["corrupt"] else ")"
     head += f" — {case['note']}" if case.get("note") else ""
@@ -103,8 +107,9 @@ NOTATION = [
     "full_contact: u = −A sin πx sin πy (contact on all of ∂Ω); t in a note: any number; semicoercive (pure "
     "Signorini): c = 0, the Laplacian alone, whose matrix K is singular (K 1 = 0 for the vector 1 of ones).",
     "- Mesh: N cells per side, h = 1/N, each square cut along its sw_ne diagonal (nw_se: the other one); "
-    "jitter moves interior nodes by up to that fraction of h. The 4N boundary nodes form B, the constrained "
-    "nodes.",
+    "jitter moves interior nodes by up to that fraction of h; a union-jack, Delaunay or graded mesh is a mesh "
+    "family of docs/meshes.md with about N cells per side, h its longest edge. The nodes on ∂Ω (4N on a "
+    "Friedrichs–Keller mesh) form B, the constrained nodes.",
     "- Discrete problem: P1 finite elements (continuous, linear on each triangle); u_h the discrete solution "
     "a column returns (written u in the residuals, Δu and Δ(u/A); in the errors u is the exact solution), K "
     "the stiffness and M the mass matrix, A = K + cM the system matrix (in a case header A is the amplitude),"
