@@ -12,13 +12,15 @@ def test_the_headline_says_the_rates_belong_to_the_method_when_every_family_matc
     verdict = headline(table, scenes, "ref")
     assert verdict.holds and verdict.strength == "measured"
     assert "On every quasi-uniform family (Delaunay (seed 0))" in verdict.text and "not of the" in verdict.text
-    assert "the graded meshes raise the order against the unknowns for W1inf_true" in verdict.text
+    graded = "on the graded (grading 2) meshes (not quasi-uniform) the order against the unknowns changes: W1inf_true"
+    assert graded in verdict.text and ": 0.50 → 1.01 (better)" in verdict.text
 
 
 def test_the_headline_names_a_family_that_converges_slower(study):
     scenes, table = study({"L4_true": 2.0 - 0.3, "W1inf_true": 0.5, "H12": 1.5})
     verdict = headline(table, scenes, "ref")
-    assert not verdict.holds and "L4_true on Delaunay (seed 0) (worse, -0.3" in verdict.text
+    assert not verdict.holds and "(Delaunay (seed 0)) 1 of 2 true-norm orders are those of the paper's" in verdict.text
+    assert "the others: L4_true on Delaunay (seed 0): 2.02 → 1.71 (worse)" in verdict.text
 
 
 def test_each_family_verdict_lists_its_norms_by_outcome(study):

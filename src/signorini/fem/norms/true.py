@@ -74,7 +74,9 @@ NEAR_LEVELS = (5, 7, 10, 14, 20, 28)
 REFINE_TARGET = 0.25  # a refinement round aims at E ≤ this fraction of the tolerance
 MAX_ROUNDS = 16  # refinement rounds of the integrals at most
 BOUND_LEVELS = 64  # quadrisection levels of the branch and bound of the maxima at most
-MAX_PIECES = 1 << 21  # pieces sampled in one level of the branch and bound at most (memory)
+# pieces sampled in one level of the branch and bound at most (memory): enough for a graded mesh,
+# whose bounds keep a third of its triangles for two levels (docs/evidence/design-measurements.md#max-pieces)
+MAX_PIECES = 1 << 23
 LATTICE = 2  # subdivisions per edge of the lattice each piece is sampled on
 MAX_LEVELS = (4, 8, 16, 32)  # lattice subdivisions per triangle edge, maxima without bounds
 BOUNDARY_LEVELS = (8, 16, 32, 64)  # Gauss points per boundary piece

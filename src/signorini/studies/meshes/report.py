@@ -122,36 +122,43 @@ def family_verdicts(table: pd.DataFrame, scenes: Sequence[FamilyScene], referenc
 
 
 def headline(table: pd.DataFrame, scenes: Sequence[FamilyScene], reference: str) -> Verdict:
-    """The study's answer in one sentence: whether the true norms' rates on every quasi-uniform
+    """The study's answer in one sentence: whether the true norms' orders on every quasi-uniform
     family other than the reference are the reference's (a property of the method, not of the
-    symmetric mesh), and what grading changes."""
+    symmetric mesh), and which orders the other families raise or lower."""
     true = table[table["norm"].str.endswith("_true") & (table["scene"] != reference)]
     uniform = true[true["quasi_uniform"]]
     differ = uniform[uniform["vs_reference"] != "same"]
-    families = sorted({s.label for s in scenes if s.quasi_uniform and s.scene != reference})
+    families = "; ".join(sorted({s.label for s in scenes if s.quasi_uniform and s.scene != reference}))
     if not families:
         text = "No family but the paper's is quasi-uniform on these meshes: Theorem 6.1's setting is not tested"
     elif differ.empty:
         text = (
-            f"On every quasi-uniform family ({', '.join(families)}) each true norm converges at the order it has "
-            "on the paper's mesh, within its tolerance: the rates are a property of the method, not of the "
+            f"On every quasi-uniform family ({families}) each true norm converges at the order it has on the "
+            "paper's mesh, within its tolerance: the rates are a property of the method, not of the "
             "Friedrichs–Keller mesh's symmetry or of the free point being no vertex"
         )
     else:
-        listed = "; ".join(
-            f"{r.norm} on {r.family} ({r.vs_reference}, {r.order_n - _ref(table, reference, r.norm):+.2f})"
-            for r in differ.itertuples()
-        )
         text = (
-            f"On the quasi-uniform families ({', '.join(families)}) the true norms' orders differ from the "
-            f"paper's mesh: {listed}"
+            f"On the quasi-uniform families ({families}) {len(uniform) - len(differ)} of {len(uniform)} true-norm "
+            "orders are those of the paper's mesh within their tolerance; the others: "
+            + _changes(table, differ, reference)
         )
-    graded = true[~true["quasi_uniform"]]
-    better = sorted(set(graded.loc[graded["vs_reference"] == "better", "norm"]))
-    if better:
-        text += f"; the graded meshes raise the order against the unknowns for {', '.join(better)}"
-    holds = bool(families) and differ.empty
-    return Verdict(text + ".", "measured", tuple(f"results/{s.scene}/errors.csv" for s in scenes), holds)
+    other = true[~true["quasi_uniform"] & (true["vs_reference"] != "same")]
+    for label, rows in other.groupby("family", sort=False):
+        text += f"; on the {label} meshes (not quasi-uniform) the order against the unknowns changes: " + _changes(
+            table, rows, reference
+        )
+    return Verdict(
+        text + ".", "measured", tuple(f"results/{s.scene}/errors.csv" for s in scenes), bool(families) and differ.empty
+    )
+
+
+def _changes(table: pd.DataFrame, rows: pd.DataFrame, reference: str) -> str:
+    """``W1inf_true on Delaunay (seed 0): 0.50 → 0.56 (better)``, the orders against the unknowns."""
+    return ", ".join(
+        f"{r.norm} on {r.family}: {_ref(table, reference, r.norm):.2f} → {r.order_n:.2f} ({r.vs_reference})"
+        for r in rows.itertuples()
+    )
 
 
 def _ref(table: pd.DataFrame, reference: str, norm: str) -> float:
@@ -202,7 +209,16 @@ def findings(
         ]
     lines += ["## Orders against the unknowns", "", _wide(table, "order_n", scenes), ""]
     lines += eoc_section(scenes)
-    lines += ["## The contact set and condition (A_h)", ""]
+    lines += [
+        "## The contact set and condition (A_h)",
+        "",
+        "Condition (A_h) (the paper's Definition 5.5) concerns the discrete contact sets Ã_h = {u_h = 0} on ∂Ω: "
+        "finitely many components, none a single node, their ends away from the corners and from each other "
+        "(docs/theory.md). Where u = ∂_n u = 0 (the biactive arc, outside the support of u) u_h may vanish or "
+        "not, either way satisfying the discrete Signorini conditions, so the ends of Ã_h there follow the "
+        "sign of the error on each mesh (by construction).",
+        "",
+    ]
     lines += [f"- {label}: {v.line()}" for label, v in contact.items()]
     lines += ["", "## The true norms' accuracy", "", accuracy or "No true norms in these scenes.", ""]
     return "\n".join(lines)
