@@ -20,3 +20,5 @@ def test_the_figure_draws_each_family_on_given_axes(study):
     assert len(orders.collections) == 1  # the expected orders
     # the made-up scenes have L4_true but no W14_true: one curve per family, or none
     assert len(l4.lines) == 3 and not w14.lines and l4.get_xscale() == "log"
+    legend = [t.get_text() for t in slopes.figure.legends[0].get_texts()]
+    assert legend == [s.label for s in scenes] + ["Theorem 6.1 (order − ε)"]

@@ -56,9 +56,12 @@ def rates_figure(table: pd.DataFrame, scenes: Sequence[FamilyScene], axes=None):
     _rates_panel(orders, table, scenes, "order_n", uniform_only=False)
     slopes.set_title("slope of log e against log h (quasi-uniform families)", fontsize="medium")
     orders.set_title("order against the unknowns n: −2 d log e / d log n", fontsize="medium")
-    orders.legend(fontsize=7, loc="upper right")
     for ax, norm in zip(lower, ERROR_NORMS, strict=True):
         _errors_panel(ax, scenes, norm)
     lower[0].set_title("error against the unknowns (the paper's Figure 3, per family)", fontsize="medium")
-    slopes.figure.tight_layout()
+    # one legend below the panels, where it hides no marker
+    handles, labels = orders.get_legend_handles_labels()
+    fig = slopes.figure
+    fig.legend(handles, labels, loc="lower center", ncol=4, fontsize=8, frameon=False)
+    fig.tight_layout(rect=(0.0, 0.08, 1.0, 1.0))
     return axes
