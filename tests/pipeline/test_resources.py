@@ -153,3 +153,15 @@ def test_a_mesh_beyond_ulimit_v_is_refused_naming_it():
     assert proc.returncode == 1, proc.stderr
     assert proc.stderr.strip().endswith("N = 4001 needs about 8.3 GB for its solve_multigrid job (estimate from the "
                                         "peaks measured at N = 2001), more than the 3.8 GB of ulimit -v"), proc.stderr
+
+
+def test_a_family_meshs_requests_follow_its_vertices_and_its_solver_route():
+    from signorini.pipeline.resources import mem_mb, sized_N, solve_rule, vertex_factor
+
+    assert vertex_factor({}) == 1.0 and sized_N(501, {}) == 501 and sized_N(501, {"family": "union_jack"}) == 501
+    graded = {"family": "graded", "grading": 2.0}
+    assert 5.0 < vertex_factor(graded) < 6.0  # refined toward the free point: several times the vertices
+    assert 1.1 < vertex_factor({"family": "delaunay", "seed": 1}) < 1.2  # a triangular lattice inside
+    assert sized_N(448, graded) > 2 * 448 and mem_mb("norm", sized_N(448, graded)) > mem_mb("norm", 448)
+    assert solve_rule("auto", 1001, paper_mesh=False) == "solve_amg" and solve_rule("direct", 1001, False) == "solve"
+    assert mem_mb("solve_amg", 1001) > mem_mb("solve_multigrid", 1001)

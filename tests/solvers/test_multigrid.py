@@ -242,7 +242,7 @@ def test_geometric_levels_are_cheaper_and_give_the_same_solution(cache):
     classical = hierarchy(sp.csr_matrix(disc.A), "classical", max_coarse=SMALL_COARSE)
     assert geometric.operator_complexity() < 1.5 < classical.operator_complexity()
     mg = multigrid_solve(disc.A, disc.b, disc.boundary, max_coarse=SMALL_COARSE)
-    assert mg.info["amg"] == "geometric" and mg.info["grid"] == [21, "sw_ne"]
+    assert mg.info["amg"] == mg.info["hierarchy"] == "geometric" and mg.info["grid"] == [21, "sw_ne"]
     assert_same_solution(mg, direct)
 
 
@@ -338,5 +338,6 @@ def test_on_other_mesh_families_the_route_takes_classical_amg_and_gives_the_dire
     direct = active_set_solve(A, b, boundary_nodes(mesh))
     mg = multigrid_solve(A, b, boundary_nodes(mesh))
     assert mg.info["grid"] is None and fk_grid(sp.csr_matrix(A)) is None
+    assert mg.info["amg"] == "geometric" and mg.info["hierarchy"] == "classical"  # says what it took
     assert np.abs(mg.u - direct.u).max() <= 1e-12 * np.abs(direct.u).max()
     assert np.array_equal(mg.active, direct.active) and mg.certificate.ok

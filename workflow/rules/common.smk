@@ -155,6 +155,15 @@ def family_mesh(scene=None):
     return mesh_of
 
 
+def sized_N(wildcards, scene=None):
+    """The N the resource requests of a job's mesh are computed from: the job's N on the paper's
+    mesh, the N of a Friedrichs-Keller mesh with as many vertices on a family mesh of its scene
+    (``scene``, else the job's; signorini.pipeline.resources.sized_N)."""
+    return resources.sized_N(
+        int(wildcards.N), scene_of(scene or wildcards.scene)["mesh"]
+    )
+
+
 # every Snakemake process parses this file (a cluster: each job): the direct imports of unchanged
 # files come from a cache in .snakemake/ (saved at the end of the Snakefile)
 IMPORTS = ImportCache(paths.IMPORT_CACHE)

@@ -21,6 +21,10 @@ rule mesh:
     priority: lambda wc: int(wc.N)
     conda:
         "../envs/signorini.yaml"
+    resources:
+        # building a graded mesh refines it level by level: as much as assembling it
+        mem_mb=lambda wc: resources.mem_mb("discretise", sized_N(wc)),
+        runtime=lambda wc: resources.runtime_min("discretise", sized_N(wc)),
     params:
         problem=scene_param("problem"),
         diagonal=scene_param("diagonal"),
@@ -46,8 +50,8 @@ rule discretise:
     conda:
         "../envs/signorini.yaml"
     resources:
-        mem_mb=lambda wc: resources.mem_mb("discretise", wc.N),
-        runtime=lambda wc: resources.runtime_min("discretise", wc.N),
+        mem_mb=lambda wc: resources.mem_mb("discretise", sized_N(wc)),
+        runtime=lambda wc: resources.runtime_min("discretise", sized_N(wc)),
     params:
         problem=scene_param("problem"),
         diagonal=scene_param("diagonal"),
@@ -74,9 +78,12 @@ rule solve:
         "../envs/signorini.yaml"
     resources:
         mem_mb=lambda wc: resources.mem_mb(
-            resources.solve_rule(scene_of(wc)["solver"], wc.N), wc.N
+            resources.solve_rule(
+                scene_of(wc)["solver"], sized_N(wc), paper_mesh(scene_of(wc)["mesh"])
+            ),
+            sized_N(wc),
         ),
-        runtime=lambda wc: resources.runtime_min("solve", wc.N),
+        runtime=lambda wc: resources.runtime_min("solve", sized_N(wc)),
     params:
         problem=scene_param("problem"),
         diagonal=scene_param("diagonal"),
@@ -102,8 +109,8 @@ rule norm:
     conda:
         "../envs/signorini.yaml"
     resources:
-        mem_mb=lambda wc: resources.mem_mb("norm", wc.N),
-        runtime=lambda wc: resources.norms_runtime_min(wc.N, [wc.norm]),
+        mem_mb=lambda wc: resources.mem_mb("norm", sized_N(wc)),
+        runtime=lambda wc: resources.norms_runtime_min(sized_N(wc), [wc.norm]),
     params:
         problem=scene_param("problem"),
         diagonal=scene_param("diagonal"),
@@ -148,9 +155,9 @@ for _scene in config["scenes"]:
             conda:
                 "../envs/signorini.yaml"
             resources:
-                mem_mb=lambda wc: resources.mem_mb("norm", wc.N),
-                runtime=lambda wc, norms=_norms: resources.norms_runtime_min(
-                    wc.N, norms
+                mem_mb=lambda wc, scene=_scene: resources.mem_mb("norm", sized_N(wc, scene)),
+                runtime=lambda wc, norms=_norms, scene=_scene: resources.norms_runtime_min(
+                    sized_N(wc, scene), norms
                 ),
             params:
                 problem=scene_of(_scene)["problem"],

@@ -19,8 +19,8 @@ rule theory_quantities:
     conda:
         "../envs/signorini.yaml"
     resources:
-        mem_mb=lambda wc: resources.mem_mb("theory_quantities", wc.N),
-        runtime=lambda wc: resources.runtime_min("theory_quantities", wc.N),
+        mem_mb=lambda wc: resources.mem_mb("theory_quantities", sized_N(wc)),
+        runtime=lambda wc: resources.runtime_min("theory_quantities", sized_N(wc)),
     params:
         problem=scene_param("problem"),
         diagonal=scene_param("diagonal"),

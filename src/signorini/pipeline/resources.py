@@ -8,13 +8,15 @@ that outlives its request is killed (docs/evidence/design-measurements.md#job-re
 
 from __future__ import annotations
 
+import functools
+import math
 import os
 import resource
 import subprocess
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 from signorini.fem.norms.names import parse_norm_name
 
@@ -23,6 +25,9 @@ MEM_MB = {
     "discretise": (500, 4000),  # the stencil assembly streams: O(n) memory
     "solve": (500, 500),  # the direct route: a sparse Cholesky factor with its fill-in
     "solve_multigrid": (500, 2000),  # the multigrid route: the matrix, its hierarchy, a few vectors
+    # the multigrid route on a mesh family's matrix: classical AMG's hierarchy is larger
+    # (docs/evidence/cold_meshes.json: 1.8 GiB at 1.16 M unknowns)
+    "solve_amg": (500, 700),
     "norm": (500, 2000),
     "theory_quantities": (500, 1500),  # O(n): the matrix, its AMG hierarchy, chunks of quadrature
     "work_precision_measure": (1500, 250),
@@ -39,12 +44,46 @@ RUNTIME_MIN = {
 SCENE_RULES = ("discretise", "solve", "norm")  # the jobs every scene runs on each mesh
 
 
-def solve_rule(solver: str, N: int) -> str:
+def solve_rule(solver: str, N: int, paper_mesh: bool = True) -> str:
     """The key of ``MEM_MB`` for a solve by ``solver`` on mesh ``N``: the route ``auto`` takes
-    there (``solvers.exact_route``) decides between the direct and the multigrid model."""
+    there (``solvers.exact_route``) decides between the direct and the multigrid model, and the
+    multigrid route off the paper's mesh takes classical AMG (``solve_amg``)."""
     from signorini.solvers import exact_route
 
-    return "solve_multigrid" if exact_route(solver, (int(N) + 1) ** 2) == "multigrid" else "solve"
+    if exact_route(solver, (int(N) + 1) ** 2) != "multigrid":
+        return "solve"
+    return "solve_multigrid" if paper_mesh else "solve_amg"
+
+
+# the mesh parameter at which a family's number of vertices per (N + 1)² is measured: within 2 % of
+# its value at N = 448 for the shipped families (docs/evidence/design-measurements.md#vertex-factor)
+VERTEX_FACTOR_N = 32
+
+
+def vertex_factor(mesh_spec: Mapping[str, Any]) -> float:
+    """About how many times ``(N + 1)²`` vertices the mesh of a scene's ``mesh`` block has: 1 for
+    the paper's mesh, else its count on the mesh of ``VERTEX_FACTOR_N`` (a graded mesh has several
+    times the Friedrichs–Keller mesh's vertices at the same ``N``)."""
+    from signorini.fem.mesh_families import check_mesh_spec, paper_mesh
+
+    if paper_mesh(mesh_spec):
+        return 1.0
+    family, params = check_mesh_spec(mesh_spec)
+    return _vertex_factor(family, tuple(sorted(params.items())))
+
+
+@functools.cache
+def _vertex_factor(family: str, params: tuple) -> float:
+    from signorini.fem.mesh_families import build_mesh
+
+    return build_mesh(family, VERTEX_FACTOR_N, **dict(params)).p.shape[1] / (VERTEX_FACTOR_N + 1) ** 2
+
+
+def sized_N(N: int, mesh_spec: Mapping[str, Any]) -> int:
+    """The ``N`` of a Friedrichs–Keller mesh with about as many vertices as the mesh ``N`` of a
+    scene's ``mesh`` block: what its jobs' requests are computed from (``N`` itself on the paper's
+    mesh)."""
+    return max(int(round((int(N) + 1) * math.sqrt(vertex_factor(mesh_spec)))) - 1, int(N))
 
 
 def mem_mb(rule: str, N: int) -> int:

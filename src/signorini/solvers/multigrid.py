@@ -455,6 +455,8 @@ class MultigridSystems:
     def info(self) -> dict:
         return {
             "amg": self.amg,
+            # what the requested kind gave: geometric falls back to classical AMG off a grid
+            "hierarchy": "classical" if self.amg == "geometric" and self.hierarchy.grid is None else self.amg,
             "grid": None if self.hierarchy.grid is None else [self.hierarchy.grid[0].size - 1, self.hierarchy.grid[1]],
             "levels": len(self.hierarchy.levels),
             "operator_complexity": self.hierarchy.operator_complexity(),
