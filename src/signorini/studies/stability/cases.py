@@ -293,6 +293,7 @@ def run_case(atlas: Atlas, case: Case) -> tuple[dict, dict[str, np.ndarray]]:
         log.info("case %s: building failed: %s", case.name, build_error)
     info["build_s"] = time.perf_counter() - t0
     info["u_norms"] = u_norms
+    info["n_constrained"] = None if disc is None else int(disc.boundary.size)  # 4N on a Friedrichs–Keller mesh
     if any(atlas.solvers[label].solver.startswith("cvxpy") for label in case.solvers):
         from signorini.solvers import installed_qp_solvers
 

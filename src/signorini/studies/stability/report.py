@@ -61,7 +61,7 @@ def _case_line(case: Mapping, sub, norms: Sequence[str], info: Mapping) -> str:
             same = "same" if r["ref_same_contact"] else "DIFFERENT"
             bits.append(f"vs {r['reference']}: Δ(u/A) {_fmt(r['ref_diff_u'])}, {same} contact set")
         if r["solver"] == "active_set":
-            bits.append(f"{int(r['n_active'])}/{_n_constrained(case)} in contact")
+            bits.append(f"{int(r['n_active'])}/{info['n_constrained']} in contact")
         if r["nan_inf"]:
             bits.append("NaN/Inf!")
         parts.append(" ".join(bits[:1]) + " (" + ", ".join(bits[1:]) + ")")
@@ -73,10 +73,6 @@ def _case_line(case: Mapping, sub, norms: Sequence[str], info: Mapping) -> str:
 
 def _isnan(x) -> bool:
     return x is None or (isinstance(x, float) and math.isnan(x))
-
-
-def _n_constrained(case: Mapping) -> int:
-    return 0 if case.get("corrupt") == "empty_constraints" else 4 * int(case["N"])
 
 
 INTRO = (
