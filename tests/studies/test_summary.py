@@ -92,6 +92,19 @@ def test_stability_counts():
     assert "never unexpected" in text
 
 
+def test_the_mesh_study_headline_comes_from_its_table_and_follows_it(tmp_path):
+    frame = pd.read_csv(f"{FIG}/meshes.csv")
+    verdict = sm.meshes_findings(f"{FIG}/meshes.csv", ("m.csv",))[0]
+    uniform = frame[frame["quasi_uniform"] & ~frame["reference"] & frame["norm"].str.endswith("_true")]
+    same = int((uniform["vs_reference"] == "same").sum())
+    assert f"{same} of {len(uniform)} true-norm orders are those of the paper's mesh" in verdict.text
+    assert verdict.sources == ("m.csv",) and not verdict.text.endswith(".")
+    matched = frame.assign(vs_reference="same")  # every family as the paper's mesh
+    matched.to_csv(tmp_path / "meshes.csv", index=False)
+    verdict = sm.meshes_findings(str(tmp_path / "meshes.csv"), ())[0]
+    assert verdict.holds and verdict.text.startswith("On every quasi-uniform family")
+
+
 def test_log_factor_fit_recovers_beta():
     N = np.array([101, 201, 401, 801, 1601])
     h = 1.0 / N

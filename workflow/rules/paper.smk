@@ -196,6 +196,7 @@ SUMMARY_SOURCES = {
     "contact_set": FIGURES["contact_set"]["csv"],
     "work_precision": FIGURES["work_precision_table"]["csv"],
     "stability": FIGURES["stability_atlas"]["csv"],
+    "meshes": FIGURES["meshes_report"]["csv"],
 }
 
 

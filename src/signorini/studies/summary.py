@@ -203,6 +203,16 @@ def stability_findings(stability: str, sources: tuple[str, ...]) -> list[Verdict
     return [Verdict(text, "measured", sources)]
 
 
+def meshes_findings(meshes: str, sources: tuple[str, ...]) -> list[Verdict]:
+    """The mesh-family study's headline (``studies.meshes.report.headline``) from its ``meshes.csv``."""
+    from signorini.studies.meshes.report import headline
+
+    table = pd.read_csv(meshes, encoding="utf-8")
+    reference = str(table.loc[table["reference"].astype(bool), "scene"].iloc[0])
+    verdict = headline(table, reference, sources)
+    return [replace(verdict, text=verdict.text.rstrip("."))]
+
+
 # the committed figures and the caption (workflow/report/<name>.rst) each is shown with
 FIGURE_CAPTIONS = {
     "figure2.png": "figure2",
@@ -215,6 +225,7 @@ FIGURE_CAPTIONS = {
     "work_precision.png": "work_precision",
     "cost_of_accuracy.png": "work_precision",
     "stability.png": "stability",
+    "meshes_rates.png": "meshes",
 }
 
 
@@ -297,6 +308,10 @@ def sections(inputs: Mapping[str, str], sources: Mapping[str, str]) -> list[tupl
     out.append(("Solvers: time to Table 1's digits", race_findings(sources)))
     stab = sources["stability"]
     out.append(("Stability atlas", _missing(sources, ("stability",)) or stability_findings(stab, (stab,))))
+    meshes = sources.get("meshes")
+    if meshes is not None:
+        found = _missing(sources, ("meshes",)) or meshes_findings(meshes, (meshes,))
+        out.append(("Theorem 6.1 on other meshes", found))
     return out
 
 

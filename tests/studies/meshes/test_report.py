@@ -9,7 +9,7 @@ from signorini.studies.verdict import Verdict
 
 def test_the_headline_says_the_rates_belong_to_the_method_when_every_family_matches(study):
     scenes, table = study()
-    verdict = headline(table, scenes, "ref")
+    verdict = headline(table, "ref")
     assert verdict.holds and verdict.strength == "measured"
     assert "On every quasi-uniform family (Delaunay (seed 0))" in verdict.text and "not of the" in verdict.text
     graded = "on the graded (grading 2) meshes (not quasi-uniform) the order against the unknowns changes: W1inf_true"
@@ -18,7 +18,7 @@ def test_the_headline_says_the_rates_belong_to_the_method_when_every_family_matc
 
 def test_the_headline_names_a_family_that_converges_slower(study):
     scenes, table = study({"L4_true": 2.0 - 0.3, "W1inf_true": 0.5, "H12": 1.5})
-    verdict = headline(table, scenes, "ref")
+    verdict = headline(table, "ref")
     assert not verdict.holds and "(Delaunay (seed 0)) 1 of 2 true-norm orders are those of the paper's" in verdict.text
     assert "the others: L4_true on Delaunay (seed 0): 2.02 → 1.71 (worse)" in verdict.text
 
@@ -59,5 +59,13 @@ def test_the_headline_says_so_when_no_family_but_the_reference_is_quasi_uniform(
 
     scenes, _ = study()
     scenes = [scenes[0], scene("gr", "graded", {"grading": 2.0}, n_factor=5.5, ratio_growth=8.0)]
-    verdict = headline(rates_table(scenes, "ref"), scenes, "ref")
+    verdict = headline(rates_table(scenes, "ref"), "ref")
     assert not verdict.holds and verdict.text.startswith("No family but the paper's is quasi-uniform")
+
+
+def test_the_headline_reads_the_rates_table_alone_and_needs_true_norms(study):
+    scenes, table = study()
+    assert headline(table, "ref", ("a.csv",)).sources == ("a.csv",)
+    plain = table[~table["norm"].str.endswith("_true")]
+    verdict = headline(plain, "ref")
+    assert not verdict.holds and verdict.text.startswith("The quasi-uniform families (Delaunay (seed 0)) have no true")
