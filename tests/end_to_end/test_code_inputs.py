@@ -188,7 +188,7 @@ def rules_after(runs: dict, module: str) -> set[str]:
 def test_edits_rerun_what_the_design_promises(edit_matrix):
     _, runs = edit_matrix
     figures = {"figure2", "figure3", "theory_report", "work_precision_figures", "stability_atlas", "contact_set",
-               "free_point_error", "eoc_against_h"}
+               "free_point_error", "eoc_against_h", "meshes_report"}
     # every figure of every study, and the summary, which reads the contact verdicts from the module
     # whose stage also draws contact_set (the static closure counts that stage's imports)
     assert rules_after(runs, "plotting.py") == figures | {"summary"}

@@ -26,7 +26,7 @@ MEM_MB = {
     "solve": (500, 500),  # the direct route: a sparse Cholesky factor with its fill-in
     "solve_multigrid": (500, 2000),  # the multigrid route: the matrix, its hierarchy, a few vectors
     # the multigrid route on a mesh family's matrix: classical AMG's hierarchy is larger
-    # (docs/evidence/cold_meshes.json: 1.8 GiB at 1.16 M unknowns)
+    # (its peak memory: docs/evidence/cold_meshes.json)
     "solve_amg": (500, 700),
     "norm": (500, 2000),
     "theory_quantities": (500, 1500),  # O(n): the matrix, its AMG hierarchy, chunks of quadrature
@@ -55,8 +55,9 @@ def solve_rule(solver: str, N: int, paper_mesh: bool = True) -> str:
     return "solve_multigrid" if paper_mesh else "solve_amg"
 
 
-# the mesh parameter at which a family's number of vertices per (N + 1)² is measured: within 2 % of
-# its value at N = 448 for the shipped families (docs/evidence/design-measurements.md#vertex-factor)
+# the mesh parameter at which a family's number of vertices per (N + 1)² is counted: small enough
+# to build in a moment, large enough to stand for the finest meshes
+# (docs/evidence/design-measurements.md#vertex-factor)
 VERTEX_FACTOR_N = 32
 
 
