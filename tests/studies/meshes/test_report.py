@@ -45,7 +45,7 @@ def test_the_page_has_every_section_and_its_numbers(study):
         "## Findings",
         "## Slopes against h",
         "## Orders against the unknowns",
-        "## EOCs per mesh pair",
+        "## Errors and EOCs per mesh",
         "## The contact set",
         "## The true norms",
     ):
@@ -69,3 +69,13 @@ def test_the_headline_reads_the_rates_table_alone_and_needs_true_norms(study):
     plain = table[~table["norm"].str.endswith("_true")]
     verdict = headline(plain, "ref")
     assert not verdict.holds and verdict.text.startswith("The quasi-uniform families (Delaunay (seed 0)) have no true")
+
+
+def test_the_tables_per_family_give_each_error_and_its_eoc(study):
+    from signorini.studies.meshes.report import eoc_section
+
+    scenes, _ = study()
+    text = "\n".join(eoc_section(scenes[:1]))
+    e = scenes[0].errors
+    assert f"| 51 | {e['h'].iloc[0]:.3e} | 2,704 | {e['L4_true'].iloc[0]:.2e} |" in text
+    assert f"| 101 | {e['h'].iloc[1]:.3e} | 10,404 | {e['L4_true'].iloc[1]:.2e} (2.00) |" in text

@@ -168,17 +168,26 @@ def _ref(table: pd.DataFrame, reference: str, norm: str) -> float:
 
 
 def eoc_section(scenes: Sequence[FamilyScene]) -> list[str]:
+    """Per family the paper's Tables 1–2 on its meshes: each mesh's error in every norm, with the EOC
+    from the previous mesh in parentheses."""
     from signorini.fem.convergence import eoc
 
-    lines = ["## EOCs per mesh pair", "", "Each row: the EOC between the mesh of its N and the previous one.", ""]
+    lines = [
+        "## Errors and EOCs per mesh",
+        "",
+        "Each row: a mesh's h, its unknowns n and its error in every norm, with the EOC between that mesh and "
+        "the previous one in parentheses (the paper's Tables 1 and 2 on each family).",
+        "",
+    ]
     for s in scenes:
         h = s.errors["h"].to_numpy(dtype=float)
-        rows = [
-            [str(N), *[_fmt(eoc(h, s.errors[n].to_numpy(dtype=float))[k]) for n in s.norms]]
-            for k, N in enumerate(s.errors["N"])
-            if k
-        ]
-        lines += [f"**{s.label}** (`{s.scene}`)", "", md_table(["N", *s.norms], rows).rstrip("\n"), ""]
+        rates = {n: eoc(h, s.errors[n].to_numpy(dtype=float)) for n in s.norms}
+        rows = []
+        for k, N in enumerate(s.errors["N"]):
+            cells = [f"{s.errors[n].iloc[k]:.2e}" + (f" ({rates[n][k]:.2f})" if k else "") for n in s.norms]
+            rows.append([str(N), f"{h[k]:.3e}", f"{int(s.meshes['n_vertices'].iloc[k]):,}", *cells])
+        header = ["N", "h", "n", *s.norms]
+        lines += [f"**{s.label}** (`{s.scene}`)", "", md_table(header, rows).rstrip("\n"), ""]
     return lines
 
 
