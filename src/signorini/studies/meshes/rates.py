@@ -21,8 +21,8 @@ import pandas as pd
 from signorini.fem.convergence import eoc, regression_slope
 from signorini.fem.norms.names import parse_norm_name
 from signorini.published import expected_rate
+from signorini.studies.theory.report import RATE_TOL, rate_verdict
 
-RATE_TOL = 0.03  # the theory scene's tolerance of a slope against an order (studies.theory.report)
 # a family is quasi-uniform on its meshes when the ratio of its largest to its smallest triangle
 # diameter grows by at most this factor from the coarsest to the finest mesh (a graded mesh's ratio
 # grows like a power of 1/h)
@@ -115,9 +115,8 @@ def tolerances(scenes: Sequence[FamilyScene], rate_tol: float = RATE_TOL) -> dic
     return tol
 
 
-def against(gap: float, tol: float, words: tuple[str, str, str]) -> str:
-    """``words[0]`` when ``|gap| ≤ tol``, else ``words[1]`` above and ``words[2]`` below."""
-    return words[0] if abs(gap) <= tol else (words[1] if gap > 0 else words[2])
+# a family's order against the paper mesh's, in the words of a comparison of two meshes
+AGAINST_REFERENCE = {"agrees": "same", "faster": "better", "slower": "worse"}
 
 
 def rates_table(scenes: Sequence[FamilyScene], reference: str, rate_tol: float = RATE_TOL) -> pd.DataFrame:
@@ -136,11 +135,11 @@ def rates_table(scenes: Sequence[FamilyScene], reference: str, rate_tol: float =
     ref = table[table["scene"] == reference].set_index("norm")["order_n"]
     measured = np.where(table["quasi_uniform"], table["slope_h"], table["order_n"])
     table["vs_expected"] = [
-        against(m - e, t, ("agrees", "faster", "slower")) if e is not None else ""
+        rate_verdict(m, e, t) if e is not None else ""
         for m, e, t in zip(measured, table["expected"], table["tol"], strict=True)
     ]
     table["vs_reference"] = [
-        against(o - ref.get(norm, np.nan), t, ("same", "better", "worse")) if norm in ref else ""
+        AGAINST_REFERENCE[rate_verdict(o, ref[norm], t)] if norm in ref else ""
         for o, norm, t in zip(table["order_n"], table["norm"], table["tol"], strict=True)
     ]
     return table
