@@ -14,9 +14,9 @@ sys.path.insert(0, SRC)
 os.environ.update(
     PYTHONPATH=os.pathsep.join(p for p in (SRC, os.environ.get("PYTHONPATH")) if p)
 )
-from signorini.pipeline.jobenv import single_threaded
+from signorini.pipeline.jobenv import job_environment
 
-single_threaded()  # one BLAS/OpenMP thread per job unless the caller says otherwise (jobs inherit it)
+job_environment()  # one BLAS/OpenMP thread, freed memory reused, unless the caller says otherwise (jobs inherit it)
 from signorini.pipeline import paths, patches
 
 # Snakemake's scheduler would start one more re-evaluation timer chain per finished job, a main

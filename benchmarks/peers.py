@@ -34,9 +34,9 @@ import sys
 import tempfile
 from pathlib import Path
 
-from signorini.pipeline.jobenv import single_threaded
+from signorini.pipeline.jobenv import job_environment
 
-single_threaded()  # one thread, like the peers (before numpy loads its BLAS)
+job_environment()  # one thread, like the peers (before numpy loads its BLAS)
 
 import numpy as np  # noqa: E402
 import yaml  # noqa: E402

@@ -13,7 +13,8 @@ the previous ones wrote (the multigrid route's solution feeds the norms), in a w
 kept between runs (``--workdir``).  The direct route is skipped where its predicted memory
 (``pipeline.resources``) exceeds this machine's.
 
-Keys: ``stages[<stage>][<N>] = {seconds, peak_rss_gib, load1}``; ``exponents[<stage>]``, the p of
+Keys: ``stages[<stage>][<N>] = {seconds, cpu_s, peak_rss_gib, load1}``, for a solve also its work
+(``SOLVE_WORK``); ``memory_touched_gib`` (``touch_memory``); ``exponents[<stage>]``, the p of
 time ∝ unknowns^p between successive N; ``solve_speedup_over_direct_N2001``; ``peak_rss_gib_N4001``,
 the largest job at N = 4001; the load average before and after every stage, its range over the
 run (``load1``) and the stages measured under a load above the cores (``loaded_stages``).
@@ -36,6 +37,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 TRUE_NORMS = ("L4_true", "L16_true", "Linf_true", "W14_true", "W116_true", "W1inf_true", "H12_true")
 ROUTES = {"solve_direct": "active_set", "solve_multigrid": "multigrid"}
+# what a solve record keeps of the route's work: Newton steps, CG iterations and V-cycles of the
+# final mesh, and the fine-grid work units of the whole solve (the cascade's coarser meshes included)
+SOLVE_WORK = ("iterations", "cg_iterations", "v_cycles", "work_units", "work_units_total")
 
 
 def _scene() -> dict:
@@ -59,12 +63,13 @@ def run_stage(stage: str, N: int, workdir: Path) -> None:
     d.mkdir(parents=True, exist_ok=True)
     conventions = scene.get("conventions", {})
     solution = d / "solution_multigrid.npz"
-    t0, c0 = time.perf_counter(), time.process_time()
+    t0, c0, work = time.perf_counter(), time.process_time(), {}
     if stage == "discretise":
         discretise_stage(at, d / "system.npz", d / "system.json")
     elif stage in ROUTES:
         name = stage.removeprefix("solve_")
-        solve_stage(at, d / "system.npz", ROUTES[stage], d / f"solution_{name}.npz", d / f"solution_{name}.json")
+        info = solve_stage(at, d / "system.npz", ROUTES[stage], d / f"solution_{name}.npz", d / f"solution_{name}.json")
+        work = {key: info["summary"][key] for key in SOLVE_WORK if key in info["summary"]}
     elif stage == "convention_norms":
         names = [n for n in scene["norms"] if not parse_norm_name(n).true]
         norms_stage(at, solution, {n: d / f"{n}.json" for n in names}, conventions)
@@ -78,7 +83,7 @@ def run_stage(stage: str, N: int, workdir: Path) -> None:
         raise ValueError(f"unknown stage {stage}")
     seconds, cpu_s = time.perf_counter() - t0, time.process_time() - c0
     rss_gib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20  # kB on Linux
-    print(json.dumps({"seconds": seconds, "cpu_s": cpu_s, "peak_rss_gib": rss_gib}))
+    print(json.dumps({"seconds": seconds, "cpu_s": cpu_s, "peak_rss_gib": rss_gib} | work))
 
 
 def _direct_fits(N: int) -> str | None:
@@ -106,6 +111,20 @@ def run_child(stage: str, N: int, workdir: Path, timeout_s: float, src: Path | N
         return {"failed": proc.stderr.strip().splitlines()[-1:], "load1": [load0, os.getloadavg()[0]]}
     out = json.loads(proc.stdout.strip().splitlines()[-1])
     return out | {"load1": [load0, os.getloadavg()[0]]}
+
+
+TOUCH_FRACTION = 0.8  # of the available memory, touched once before timing (``touch_memory``)
+
+
+def touch_memory() -> float:
+    """Fill ``TOUCH_FRACTION`` of the available memory once, in a child process, and free it: a
+    virtual machine backs its memory on first use, which costs several times a later page fault
+    (docs/evidence/design-measurements.md#reuse-freed-memory), and would be charged to whichever
+    stage first reached that much.  The GiB touched."""
+    available = os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    doubles = int(TOUCH_FRACTION * available) // 8
+    subprocess.run([sys.executable, "-c", f"import numpy; numpy.ones({doubles})"], check=True)
+    return doubles * 8 / 2**30
 
 
 def exponents(stages: dict, unknowns: dict[int, int]) -> dict[str, dict[str, float]]:
@@ -180,14 +199,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--resume", action="store_true", help="keep the stages --out measured already")
     parser.add_argument("--child", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
-    from signorini.pipeline.jobenv import single_threaded
+    from signorini.pipeline.jobenv import job_environment
 
-    single_threaded()  # before numpy loads its BLAS, in this process and its children
+    job_environment()  # before numpy loads its BLAS, in this process and its children
     if args.child:
         run_stage(args.child, args.N[0], args.workdir)
         return 0
     t0 = time.time()
-    head = {"date": time.strftime("%Y-%m-%d %H:%M"), "cores": os.cpu_count()}
+    head = {"date": time.strftime("%Y-%m-%d %H:%M"), "cores": os.cpu_count(), "memory_touched_gib": touch_memory()}
     args.out.parent.mkdir(parents=True, exist_ok=True)
 
     def save(summary: dict, complete: bool = False) -> None:

@@ -36,9 +36,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from signorini.pipeline.jobenv import single_threaded
+from signorini.pipeline.jobenv import job_environment
 
-single_threaded()  # one thread: CPU time = one core (before numpy loads its BLAS)
+job_environment()  # one thread: CPU time = one core (before numpy loads its BLAS)
 
 import numpy as np  # noqa: E402
 

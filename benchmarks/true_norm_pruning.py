@@ -31,9 +31,9 @@ import sys
 import time
 from pathlib import Path
 
-from signorini.pipeline.jobenv import THREAD_VARIABLES, single_threaded
+from signorini.pipeline.jobenv import THREAD_VARIABLES, job_environment
 
-single_threaded()  # before numpy loads its BLAS
+job_environment()  # before numpy loads its BLAS
 
 import numpy as np  # noqa: E402
 

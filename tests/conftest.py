@@ -9,13 +9,12 @@ from __future__ import annotations
 
 import os
 
-# One BLAS/OpenMP thread unless the caller says otherwise: the tests use small meshes,
-# where threads buy nothing, and on a loaded 2-core machine busy-waiting BLAS threads
-# slowed the (then PCG-based) active-set solver 5-20x (N = 101 cold start: 25 s vs 1.1 s).
+# The environment every job computes in (one BLAS/OpenMP thread, freed memory reused), for this
+# process's BLAS and the processes the tests start (docs/evidence/design-measurements.md#one-thread-per-job).
 # Must happen before numpy is imported.
-from signorini.pipeline.jobenv import single_threaded  # noqa: E402
+from signorini.pipeline.jobenv import job_environment  # noqa: E402
 
-single_threaded()
+job_environment()
 
 from pathlib import Path  # noqa: E402
 

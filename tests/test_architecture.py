@@ -484,17 +484,17 @@ def test_the_layout_check_finds_what_breaks_the_layout(tmp_path, change, exempt,
     assert layout_problems(tmp_path / "src", tmp_path / "tests", exempt) == problems
 
 
-def test_the_thread_variables_are_named_in_one_module():
+def test_the_thread_and_allocator_variables_are_named_in_one_module():
     """The environment a job computes in is set in one place (``signorini.pipeline.jobenv``):
-    no other file of the tree names a thread variable."""
-    from signorini.pipeline.jobenv import THREAD_VARIABLES
+    no other file of the tree names a thread or allocator variable."""
+    from signorini.pipeline.jobenv import ALLOCATOR_VARIABLES, THREAD_VARIABLES
 
     files = [ROOT / "Snakefile", *(p for d in ("src", "workflow", "benchmarks", "tests", "notebooks")
                                    for p in (ROOT / d).rglob("*") if p.suffix in (".py", ".smk"))]
     naming = {
         str(p.relative_to(ROOT))
         for p in files
-        if any(name in p.read_text(encoding="utf-8") for name in THREAD_VARIABLES)
+        if any(name in p.read_text(encoding="utf-8") for name in (*THREAD_VARIABLES, *ALLOCATOR_VARIABLES))
     }
     assert naming == {"src/signorini/pipeline/jobenv.py"}
 

@@ -37,6 +37,18 @@ def test_interpolate_fk_reproduces_linear_functions_across_meshes(diagonal, rng)
     np.testing.assert_allclose(interpolate_fk(5, diagonal, lin(coarse.p), fine.p), lin(fine.p), atol=1e-14)
 
 
+@pytest.mark.parametrize("diagonal", DIAGONALS)
+def test_interpolate_fk_by_blocks_gives_the_same_bits(diagonal, rng, monkeypatch):
+    """Blocks of points (a few, and a last one cut short) give what one block gives, bit for bit."""
+    import signorini.fem.discrete as discrete
+
+    mesh = friedrichs_keller(11, diagonal)
+    values, pts = rng.normal(size=mesh.p.shape[1]), np.hstack([rng.uniform(0, 1, size=(2, 250)), mesh.p])
+    whole = interpolate_fk(11, diagonal, values, pts)
+    monkeypatch.setattr(discrete, "INTERPOLATION_CHUNK", 64)
+    assert _same_bits(interpolate_fk(11, diagonal, values, pts), whole)
+
+
 def test_build_bundles_a_consistent_discrete_problem():
     problem = Problem(x0=0.47)
     disc = build(problem, 9, "nw_se")

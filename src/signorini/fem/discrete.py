@@ -46,11 +46,24 @@ def build(problem: Problem, N: int, diagonal: str = DEFAULT_DIAGONAL, mesh: Mesh
     return DiscreteProblem(problem, int(N), diagonal, mesh, A, b, fk_boundary_nodes(int(N)))
 
 
+INTERPOLATION_CHUNK = 1 << 18  # points per block of ``interpolate_fk``: its temporaries stay in the cache
+
+
 def interpolate_fk(N: int, diagonal: str, values: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Evaluate the P1 function ``values`` on the (unjittered) Friedrichs–Keller mesh
-    ``friedrichs_keller(N, diagonal)`` at ``points`` (shape (2, m)), by direct cell location."""
+    ``friedrichs_keller(N, diagonal)`` at ``points`` (shape (2, m)), by direct cell location, a
+    block of ``INTERPOLATION_CHUNK`` points at a time."""
     V = np.asarray(values).reshape(N + 1, N + 1)  # vertex (i, j) at (i/N, j/N), see mesh.py
-    xs, ys = np.clip(points[0] * N, 0.0, N), np.clip(points[1] * N, 0.0, N)
+    points = np.asarray(points)
+    out = np.empty(points.shape[1])
+    for start in range(0, points.shape[1], INTERPOLATION_CHUNK):
+        block = slice(start, start + INTERPOLATION_CHUNK)
+        out[block] = _interpolate_block(N, diagonal, V, points[0, block], points[1, block])
+    return out
+
+
+def _interpolate_block(N: int, diagonal: str, V: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    xs, ys = np.clip(x * N, 0.0, N), np.clip(y * N, 0.0, N)
     i, j = np.minimum(xs.astype(int), N - 1), np.minimum(ys.astype(int), N - 1)
     xi, eta = xs - i, ys - j
     v00, v10, v01, v11 = V[i, j], V[i + 1, j], V[i, j + 1], V[i + 1, j + 1]

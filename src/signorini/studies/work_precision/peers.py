@@ -78,9 +78,9 @@ def _unavailable(reason: str) -> dict:
 
 def _env() -> dict[str, str]:
     """The driver's environment: one BLAS/OpenMP thread, like every job (no oversubscription)."""
-    from signorini.pipeline.jobenv import single_threaded
+    from signorini.pipeline.jobenv import job_environment
 
-    return single_threaded(dict(os.environ))
+    return job_environment(dict(os.environ))
 
 
 def _last_line(text: str) -> str:
