@@ -49,6 +49,14 @@ def test_interpolate_fk_by_blocks_gives_the_same_bits(diagonal, rng, monkeypatch
     assert _same_bits(interpolate_fk(11, diagonal, values, pts), whole)
 
 
+@pytest.mark.parametrize("diagonal", DIAGONALS)
+def test_an_unbuilt_paper_mesh_has_the_vertices_of_the_built_one(diagonal):
+    from dataclasses import replace
+
+    disc = build(Problem(), 13, diagonal)
+    assert _same_bits(replace(disc, mesh=None).vertices, disc.mesh.p) and disc.vertices is disc.mesh.p
+
+
 def test_build_bundles_a_consistent_discrete_problem():
     problem = Problem(x0=0.47)
     disc = build(problem, 9, "nw_se")

@@ -14,21 +14,28 @@ import scipy.sparse as sp
 from skfem import MeshTri
 
 from signorini.fem.assembly import CHUNK_ELEMENTS, fk_stencil_matrix, load_vector, system_matrix
-from signorini.fem.mesh import DEFAULT_DIAGONAL, boundary_nodes, fk_boundary_nodes, friedrichs_keller
+from signorini.fem.mesh import DEFAULT_DIAGONAL, boundary_nodes, fk_boundary_nodes, fk_vertices, friedrichs_keller
 from signorini.fem.problem import Problem
 
 
 @dataclass
 class DiscreteProblem:
-    """Mesh, ``A = K + c M``, ``b = ∫ f φ`` and the constrained (boundary) nodes."""
+    """Mesh, ``A = K + c M``, ``b = ∫ f φ`` and the constrained (boundary) nodes.  ``mesh`` None:
+    the Friedrichs–Keller mesh ``friedrichs_keller(N, diagonal)``, not built (a solve needs only
+    its ``vertices``; the triangles of N = 4001 are 0.4 GB)."""
 
     problem: Problem
     N: int
     diagonal: str
-    mesh: MeshTri
+    mesh: MeshTri | None
     A: sp.csr_matrix
     b: np.ndarray
     boundary: np.ndarray
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """(2, n): the mesh's vertices, node k at ``vertices[:, k]``."""
+        return fk_vertices(self.N) if self.mesh is None else self.mesh.p
 
 
 def build(problem: Problem, N: int, diagonal: str = DEFAULT_DIAGONAL, mesh: MeshTri | None = None) -> DiscreteProblem:

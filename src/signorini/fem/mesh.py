@@ -40,16 +40,22 @@ def friedrichs_keller(N: int, diagonal: str = DEFAULT_DIAGONAL, jitter: float = 
     if not 0.0 <= jitter < 0.5:
         raise ValueError(f"jitter={jitter} must lie in [0, 0.5)")
     N = int(N)
-    t1 = np.linspace(0.0, 1.0, N + 1)
-    p = np.empty((2, (N + 1) ** 2))  # vertex (i, j) has index i (N + 1) + j
-    p[0].reshape(N + 1, N + 1)[:] = t1[:, None]
-    p[1].reshape(N + 1, N + 1)[:] = t1[None, :]
-    t = _fk_triangles(N, diagonal)
+    p, t = fk_vertices(N), _fk_triangles(N, diagonal)
     if jitter > 0.0:
         rng = np.random.default_rng(seed)
         interior = (p[0] > 0) & (p[0] < 1) & (p[1] > 0) & (p[1] < 1)
         p[:, interior] += jitter / N * rng.uniform(-1.0, 1.0, size=(2, interior.sum()))
     return MeshTri(p, t, sort_t=False)
+
+
+def fk_vertices(N: int) -> np.ndarray:
+    """(2, (N + 1)²): the vertices of the Friedrichs–Keller mesh with ``N`` cells per side (either
+    diagonal), vertex (i, j) at (i/N, j/N) with index i (N + 1) + j."""
+    t1 = np.linspace(0.0, 1.0, N + 1)
+    p = np.empty((2, (N + 1) ** 2))
+    p[0].reshape(N + 1, N + 1)[:] = t1[:, None]
+    p[1].reshape(N + 1, N + 1)[:] = t1[None, :]
+    return p
 
 
 def _fk_triangles(N: int, diagonal: str) -> np.ndarray:

@@ -38,7 +38,7 @@ def _cascade(disc: DiscreteProblem, solver: str, options: dict) -> tuple[np.ndar
     t0 = time.perf_counter()
     coarse = build(disc.problem, Nc, disc.diagonal)
     result = solve_discrete(coarse, solver, "cascade", **options)
-    start = interpolate_fk(Nc, disc.diagonal, result.u, disc.mesh.p)
+    start = interpolate_fk(Nc, disc.diagonal, result.u, disc.vertices)
     cost = {"N": Nc, "seconds": time.perf_counter() - t0, "solve_s": result.wall_time_s}
     if "work_units" in result.info:
         ratio = coarse.A.nnz / disc.A.nnz

@@ -235,11 +235,11 @@ class GalerkinHierarchy:
         self.A = A
         solver = hierarchy(A, kind, max_coarse, grid)
         self.levels, self.grid = solver.levels, solver.grid
-        # the row of each stored entry, made after the set-up's temporaries are gone (peak memory)
-        index = np.int32 if A.shape[0] < 2**31 else np.int64
-        self.rows = np.repeat(np.arange(A.shape[0], dtype=index), np.diff(A.indptr))
         for level in self.levels[:-1]:  # smoothed aggregation's transfers are BSR
-            level.P, level.R = sp.csr_matrix(level.P), sp.csr_matrix(level.R)
+            # the restriction is the prolongation's transpose read column-wise: no copy, and the
+            # same sums in the same order as its own CSR (ascending fine index in every coarse row)
+            level.P = sp.csr_matrix(level.P)
+            level.R = level.P.T
         for level in self.levels[1:]:
             level.A = sp.csr_matrix(level.A)
             level.A.sum_duplicates()
@@ -284,13 +284,13 @@ class GalerkinHierarchy:
             return
         A, fine = self.A, self.levels[0].A
         S = np.unique(np.concatenate([changed, A.indices[_ranges(A.indptr[changed], A.indptr[changed + 1])]]))
-        pos = _ranges(A.indptr[S], A.indptr[S + 1])
-        values = clamped_values(A, self.rows, free, pos)
+        pos, rows = _ranges(A.indptr[S], A.indptr[S + 1]), np.repeat(S, A.indptr[S + 1] - A.indptr[S])
+        values = clamped_values(A, rows, free, pos)
         diff = values - fine.data[pos]
         fine.data[pos] = values
         self.free = free.copy()
         keep = diff != 0.0
-        rows, cols, diff = self.rows[pos][keep], A.indices[pos][keep], diff[keep]
+        rows, cols, diff = rows[keep], A.indices[pos][keep], diff[keep]
         for level, coarse in zip(self.levels[:-1], self.levels[1:], strict=True):
             S = np.unique(rows)  # Δ is symmetric: its rows are its support
             delta = sp.csr_matrix((diff, (np.searchsorted(S, rows), np.searchsorted(S, cols))), shape=(S.size,) * 2)

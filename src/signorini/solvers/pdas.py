@@ -62,9 +62,10 @@ def clamped_values(
 ) -> np.ndarray:
     """CSR values of Ã = D A D + (I - D) in ``A``'s own sparsity pattern (explicit zeros kept,
     so every active set shares one symbolic factorisation or one matrix layout); ``rows`` is the
-    row of each stored entry.  With ``positions``: the values at those positions of ``A.data``."""
+    row of each stored entry.  With ``positions``: the values at those positions of ``A.data``,
+    ``rows`` the row of each of them."""
     pos = slice(None) if positions is None else positions
-    r, c = rows[pos], A.indices[pos]
+    r, c = rows, A.indices[pos]
     data = np.where(free[r] & free[c], A.data[pos], 0.0)
     data[(r == c) & ~free[r]] = 1.0
     return data

@@ -37,7 +37,7 @@ def solve_stage(
     problem, N, diagonal = at.problem, at.N, at.diagonal
     t0 = time.perf_counter()
     A, b, boundary = load_system(system_npz, N)
-    mesh = at.mesh()  # the cascade interpolates onto its nodes
+    mesh = None if at.paper_mesh else at.mesh()  # the cascade interpolates onto its vertices
     disc = DiscreteProblem(problem, N, diagonal, mesh, A, b, boundary)
     t1 = time.perf_counter()
     result = solve_discrete(disc, solver=solver, **dict(solver_options or {}))
