@@ -67,7 +67,10 @@ def test_a_mesh_fits_or_not_by_the_route_of_its_scene(solver, fits):
     if fits:
         check_config(config, 24 * 1024)
     else:
-        with pytest.raises(ConfigError, match=r"N = 4001 needs about 31\.8 GB for its solve job"):
+        from signorini.pipeline.resources import mem_mb
+
+        need = f"{mem_mb('solve', 4001) / 1024:.1f}".replace(".", r"\.")
+        with pytest.raises(ConfigError, match=rf"N = 4001 needs about {need} GB for its solve job"):
             check_config(config, 24 * 1024)
 
 
@@ -136,7 +139,8 @@ def test_a_mesh_beyond_a_cgroup_limit_is_refused_naming_it(tmp_path, monkeypatch
     proc, root = fake_cgroups(tmp_path, v2={"/job": str(2 * GB)})
     monkeypatch.setattr(resources, "usable_memory", partial(resources.usable_memory, proc=proc, root=root))
     check_config(_smoke_config([11, 401]))
-    with pytest.raises(ConfigError, match=r"N\[1\]: N = 1001 needs about 2\.4 GB .* more than the 2\.0 GB of the "
+    need = f"{resources.mem_mb('solve', 1001) / 1024:.1f}".replace(".", r"\.")
+    with pytest.raises(ConfigError, match=rf"N\[1\]: N = 1001 needs about {need} GB .* more than the 2\.0 GB of the "
                        r"cgroup limit$"):
         check_config(_smoke_config([11, 1001]))
 
@@ -165,3 +169,32 @@ def test_a_family_meshs_requests_follow_its_vertices_and_its_solver_route():
     assert sized_N(448, graded) > 2 * 448 and mem_mb("norm", sized_N(448, graded)) > mem_mb("norm", 448)
     assert solve_rule("auto", 1001, paper_mesh=False) == "solve_amg" and solve_rule("direct", 1001, False) == "solve"
     assert mem_mb("solve_amg", 1001) > mem_mb("solve_multigrid", 1001)
+
+
+# the rule whose memory model requests each stage of benchmarks/scale.py (the others: a norm job)
+SCALE_STAGE_RULES = {
+    "discretise": "discretise",
+    "solve_direct": "solve",
+    "solve_multigrid": "solve_multigrid",
+    "theory_quantities": "theory_quantities",
+}
+
+
+def test_every_stage_of_the_committed_scale_run_fits_in_its_request():
+    """The memory models hold the peaks measured by ``benchmarks/scale.py``
+    (``docs/evidence/scale.json``) at every mesh, with headroom."""
+    import json
+
+    from signorini.pipeline.resources import mem_mb
+
+    stages = json.loads((ROOT / "docs/evidence/scale.json").read_text(encoding="utf-8"))["stages"]
+    measured = [
+        (stage, int(N), rec["peak_rss_gib"] * 1024)
+        for stage, by_N in stages.items()
+        for N, rec in by_N.items()
+        if "peak_rss_gib" in rec
+    ]
+    assert {stage for stage, _, _ in measured} >= set(SCALE_STAGE_RULES)
+    short = [(s, N, round(peak), mem_mb(SCALE_STAGE_RULES.get(s, "norm"), N)) for s, N, peak in measured
+             if 1.05 * peak > mem_mb(SCALE_STAGE_RULES.get(s, "norm"), N)]
+    assert not short, f"peak MB above the request / 1.05: {short}"

@@ -23,7 +23,7 @@ from signorini.fem.norms.names import parse_norm_name
 # rule: (base, N² per unit) of the memory request in MB and of the run-time request in minutes
 MEM_MB = {
     "discretise": (500, 4000),  # the stencil assembly streams: O(n) memory
-    "solve": (500, 500),  # the direct route: a sparse Cholesky factor with its fill-in
+    "solve": (500, 400),  # the direct route: a sparse Cholesky factor with its fill-in
     "solve_multigrid": (500, 2000),  # the multigrid route: the matrix, its hierarchy, a few vectors
     # the multigrid route on a mesh family's matrix: classical AMG's hierarchy is larger
     # (its peak memory: docs/evidence/cold_meshes.json)
