@@ -45,3 +45,15 @@ def test_failed_certificate_writes_nothing_and_logs_residuals(tmp_path, monkeypa
         )
     assert not (tmp_path / "s.npz").exists() and not (tmp_path / "s.json").exists()
     assert "stationarity=1.00e-03" in log.read_text()
+
+
+def test_the_solve_on_the_paper_mesh_does_not_build_its_triangles(tmp_path, monkeypatch):
+    """What the cascade needs of the paper's mesh is its vertices (``DiscreteProblem.vertices``, the
+    built mesh's bit for bit: ``tests/fem/test_discrete.py``)."""
+    import signorini.studies.scene.store as store
+
+    at = SceneMesh(PROBLEM, 101, "sw_ne")
+    discretise_stage(at, tmp_path / "system.npz", tmp_path / "system.json")
+    monkeypatch.setattr(store, "friedrichs_keller", lambda *a, **k: pytest.fail("the paper mesh was built"))
+    info = solve_stage(at, tmp_path / "system.npz", "multigrid", tmp_path / "s.npz", tmp_path / "s.json")
+    assert info["summary"]["cascade"]["N"] == 101 // 4  # the cascade ran, on the vertices alone
