@@ -284,7 +284,8 @@ class GalerkinHierarchy:
             return
         A, fine = self.A, self.levels[0].A
         S = np.unique(np.concatenate([changed, A.indices[_ranges(A.indptr[changed], A.indptr[changed + 1])]]))
-        pos, rows = _ranges(A.indptr[S], A.indptr[S + 1]), np.repeat(S, A.indptr[S + 1] - A.indptr[S])
+        starts, ends = A.indptr[S], A.indptr[S + 1]
+        pos, rows = _ranges(starts, ends), np.repeat(S, ends - starts)  # the stored entries of rows S
         values = clamped_values(A, rows, free, pos)
         diff = values - fine.data[pos]
         fine.data[pos] = values

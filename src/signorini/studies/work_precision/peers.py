@@ -77,7 +77,8 @@ def _unavailable(reason: str) -> dict:
 
 
 def _env() -> dict[str, str]:
-    """The driver's environment: one BLAS/OpenMP thread, like every job (no oversubscription)."""
+    """The driver's environment: the one every job computes in (``pipeline.jobenv``: one BLAS/OpenMP
+    thread, no oversubscription; freed memory reused)."""
     from signorini.pipeline.jobenv import job_environment
 
     return job_environment(dict(os.environ))
