@@ -17,6 +17,9 @@ from helpers import ROOT
 # Stand-ins for the interpreter, pip and uv that `make setup` calls: they behave like the real
 # ones where it matters (pip writes uv's metadata, then the binary, and does nothing once the
 # metadata is there: "Requirement already satisfied") and can be made to hang, to be interrupted.
+# The hang writes its marker from the process that then sleeps, after restoring SIGINT's default:
+# a shell's `touch; sleep` leaves a window where Ctrl-C reaches the shell between the two and is
+# lost by the forked child, which then sleeps out its full time.
 FAKE_PYTHON = """#!/bin/bash
 [ "$1 $2" = "-m venv" ] || exit 2
 dir="$3"; mkdir -p "$dir/bin" "$dir/lib"
@@ -25,23 +28,29 @@ cat > "$dir/bin/pip" <<PIP
 [ -e "$dir/lib/uv.dist-info" ] && exit 0
 mkdir -p "$dir/lib/uv.dist-info"
 printf 'half a binary' > "$dir/bin/uv"
-[ -n "\\$FAKE_HANG_PIP" ] && { touch "\\$FAKE_HANG_PIP"; sleep 60; }
+[ -n "\\$FAKE_HANG_PIP" ] && "\\$FAKE_SLEEP" "\\$FAKE_HANG_PIP"
 cp "$FAKE_UV" "$dir/bin/uv" && chmod +x "$dir/bin/uv"
 PIP
 chmod +x "$dir/bin/pip"
+"""
+FAKE_SLEEP = """#!{python}
+import pathlib, signal, sys, time
+signal.signal(signal.SIGINT, signal.SIG_DFL)
+pathlib.Path(sys.argv[1]).touch()
+time.sleep(60)
 """
 FAKE_UV = """#!/bin/bash
 case "$1" in
   --version) echo "uv 0.0.0 (stand-in)" ;;
   venv) for arg; do last="$arg"; done; mkdir -p "$last/bin"
         printf '#!/bin/sh\\nexit 0\\n' > "$last/bin/python"; chmod +x "$last/bin/python" ;;
-  pip) if [ "$2" = sync ] && [ -n "$FAKE_HANG_SYNC" ]; then touch "$FAKE_HANG_SYNC"; sleep 60; fi ;;
+  pip) if [ "$2" = sync ] && [ -n "$FAKE_HANG_SYNC" ]; then "$FAKE_SLEEP" "$FAKE_HANG_SYNC"; fi ;;
 esac
 """
 
 
 def _make_setup(repo: Path, hang: str | None = None, **env: str) -> subprocess.Popen:
-    env = {**os.environ, "FAKE_UV": str(repo / "fake-uv"), **env}
+    env = {**os.environ, "FAKE_UV": str(repo / "fake-uv"), "FAKE_SLEEP": str(repo / "fake-sleep"), **env}
     if hang:
         env[hang] = str(repo / "hanging")
     # Ctrl-C must reach make even when the suite itself was started with SIGINT ignored (a
@@ -66,7 +75,9 @@ def setup_copy(tmp_path):
 
     for name in ("Makefile", "environment.lock", "pyproject.toml"):
         shutil.copy2(ROOT / name, tmp_path / name)
-    for name, text in (("fake-python", FAKE_PYTHON), ("fake-uv", FAKE_UV)):
+    sleep = FAKE_SLEEP.format(python=sys.executable)
+    fakes = (("fake-python", FAKE_PYTHON), ("fake-uv", FAKE_UV), ("fake-sleep", sleep))
+    for name, text in fakes:
         (tmp_path / name).write_text(text)
         (tmp_path / name).chmod(0o755)
     return tmp_path
