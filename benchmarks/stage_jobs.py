@@ -108,6 +108,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--timeout", type=float, default=1800.0, help="per job, seconds")
     parser.add_argument("--out", type=Path, default=ROOT / "docs/evidence/stage_jobs.json")
     args = parser.parse_args(argv)
+    from signorini.pipeline.jobenv import job_environment
+
+    # the jobs' environment (threads, allocator) before they start: glibc reads it at start-up
+    job_environment()
     t0 = time.time()
     git = ["git", "-C", str(ROOT)]
 

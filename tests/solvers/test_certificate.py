@@ -128,3 +128,46 @@ def test_certificate_never_certifies_nan():
     assert not Certificate(0.0, 0.0, 0.0, float("nan"), 1e-10).ok
     assert not Certificate(float("nan"), 0.0, 0.0, 0.0, 1e-10).ok
     assert Certificate(0.0, 0.0, 0.0, 0.0, 1e-10).ok
+
+
+def _signed_random(n: int, seed: int) -> sp.csr_matrix:
+    """A nonsymmetric CSR matrix (pattern and values) with an empty row."""
+    signed = sp.random(n, n, density=0.05, random_state=seed) - sp.random(n, n, density=0.05, random_state=seed + 1)
+    A = sp.lil_matrix(signed)
+    A[7, :] = 0.0  # a row that stores nothing
+    A = sp.csr_matrix(A)
+    A.eliminate_zeros()
+    return A
+
+
+@pytest.mark.parametrize(("compiled_from", "chunk"), [(0, 1 << 20), (10**9, 1 << 20), (10**9, 64), (10**9, 7)])
+def test_abs_product_is_the_product_with_the_absolute_matrix_bit_for_bit(monkeypatch, compiled_from, chunk):
+    """``|A| y`` without forming ``|A|`` (compiled, or numpy a block of rows at a time, block edges
+    included) equals the CSR product with ``|A|`` in every bit (the same summation order per row),
+    an empty row included."""
+    from signorini.solvers import certificate
+
+    monkeypatch.setattr(certificate, "COMPILED_MIN_UNKNOWNS", compiled_from)
+    monkeypatch.setattr(certificate, "ABS_CHUNK_ROWS", chunk)
+    A = _signed_random(300, 4)
+    y = np.random.default_rng(3).standard_normal(300)
+    got = certificate.abs_product(A, y)
+    assert got.tobytes() == (abs(A) @ y).tobytes() and got[7] == 0.0
+
+
+@pytest.mark.parametrize("seed", [4, 9])
+def test_the_compiled_asymmetry_is_the_largest_entry_of_a_minus_its_transpose(monkeypatch, seed):
+    """The symmetry check without forming ``Aᵀ`` gives numpy's value: entries stored on one side
+    only, entries on both sides with different values, and a symmetric matrix (0)."""
+    from signorini.solvers import certificate
+
+    A = _signed_random(300, seed)
+    S = sp.csr_matrix(A + A.T)
+    S.sort_indices()
+    T = S.tolil()
+    T[3, 5] = T[3, 5] + 1e-3  # one entry off its mirror
+    T = sp.csr_matrix(T)
+    numpy_values = [certificate.asymmetry(M) for M in (A, S, T)]
+    monkeypatch.setattr(certificate, "COMPILED_MIN_UNKNOWNS", 0)
+    assert [certificate.asymmetry(M) for M in (A, S, T)] == numpy_values
+    assert numpy_values[0] > 0.0 and numpy_values[1] == 0.0 and numpy_values[2] == pytest.approx(1e-3, rel=1e-9)

@@ -100,7 +100,8 @@ def kkt_certificate(
     sigma = max(np.abs(Au).max(initial=0.0), np.abs(b).max(initial=0.0), _TINY)
     unorm = max(np.abs(u).max(initial=0.0), _TINY)
     uB = u[constrained]
-    floor = ROUNDOFF_FACTOR * np.finfo(float).eps * float((abs(A) @ np.abs(u)).max(initial=0.0)) / sigma
+    rounding = abs_product(sp.csr_matrix(A), np.abs(u)).max(initial=0.0)  # ‖|A||u|‖∞
+    floor = ROUNDOFF_FACTOR * np.finfo(float).eps * float(rounding) / sigma
     return Certificate(
         stationarity=float(np.abs(Au - b - lam_full).max(initial=0.0) / sigma),
         primal=float(max(0.0, -uB.min(initial=0.0)) / unorm),
@@ -118,6 +119,42 @@ SYMMETRY_RTOL = 1e-12  # max |A - Aᵀ| ≤ SYMMETRY_RTOL · max |A|
 PSD_SHIFT = 1e-8  # A + PSD_SHIFT · diag(A) must admit a Cholesky factorisation
 
 
+# Rows from which the compiled kernels pay for their import (``signorini.solvers.kernels``;
+# docs/evidence/design-measurements.md#compiled-kernels); below, numpy code with the same bits.
+COMPILED_MIN_UNKNOWNS = 1 << 21
+ABS_CHUNK_ROWS = 1 << 20  # rows of |A| formed at a time by numpy's ``abs_product``
+
+
+def abs_product(A: sp.csr_matrix, y: np.ndarray) -> np.ndarray:
+    """``|A| y`` for a CSR matrix, each row summed in CSR order from 0.0 as ``abs(A) @ y`` sums it,
+    without forming ``|A|`` (at N = 4001 a copy of ``A`` is 1.3 GB): compiled for large matrices,
+    else a block of rows at a time."""
+    out = np.empty(A.shape[0])
+    y = np.ascontiguousarray(y, dtype=float)
+    if A.shape[0] >= COMPILED_MIN_UNKNOWNS:
+        from signorini.solvers.kernels import abs_product_rows
+
+        abs_product_rows(A.indptr, A.indices, A.data, y, out)
+        return out
+    for start in range(0, A.shape[0], ABS_CHUNK_ROWS):
+        stop = min(start + ABS_CHUNK_ROWS, A.shape[0])
+        lo, hi = A.indptr[start], A.indptr[stop]
+        products = np.abs(A.data[lo:hi]) * y[A.indices[lo:hi]]
+        rows = np.repeat(np.arange(stop - start), np.diff(A.indptr[start : stop + 1]))
+        out[start:stop] = np.bincount(rows, weights=products, minlength=stop - start)
+    return out
+
+
+def asymmetry(A: sp.csr_matrix) -> float:
+    """``max |A - Aᵀ|`` over the stored entries (``A`` in canonical CSR form): compiled for large
+    matrices without forming ``Aᵀ``, else through it."""
+    if A.shape[0] >= COMPILED_MIN_UNKNOWNS:
+        from signorini.solvers.kernels import asymmetry_rows
+
+        return float(asymmetry_rows(A.indptr, A.indices, A.data))
+    return float(np.abs((A - A.T).data).max(initial=0.0))
+
+
 def check_psd(A: sp.spmatrix) -> None:
     """Reject a matrix that is not symmetric positive semidefinite (the QP would be non-convex,
     and for an indefinite ``A`` unbounded along some directions: no minimiser exists).
@@ -132,15 +169,19 @@ def check_psd(A: sp.spmatrix) -> None:
     ``c = 0`` (semicoercive, still convex) and rejects ``λ_min(A) < -1e-8 max A_ii`` roughly.
     """
     A = sp.csr_matrix(A)
+    if not A.has_canonical_format:
+        A = A.copy()
+        A.sum_duplicates()
+        A.sort_indices()
     scale = max(float(np.abs(A.data).max(initial=0.0)), _TINY)
-    asym = float(np.abs((A - A.T).data).max(initial=0.0))
+    asym = asymmetry(A)
     if asym > SYMMETRY_RTOL * scale:
         raise BadInputError(
             f"matrix is not symmetric: max |A - Aᵀ| = {asym:.2e} = {asym / scale:.1e} max |A| "
             f"(tolerance {SYMMETRY_RTOL:.0e})"
         )
     d = A.diagonal()
-    off = np.asarray(abs(A).sum(axis=1)).ravel() - np.abs(d)
+    off = abs_product(A, np.ones(A.shape[1])) - np.abs(d)
     if np.all(d >= off - 1e-12 * d):  # weakly diagonally dominant, positive diagonal: PSD
         return
     from signorini.solvers.linalg import is_positive_definite
@@ -174,4 +215,3 @@ def check_qp_data(A: sp.spmatrix, b: np.ndarray, constrained: np.ndarray) -> Non
     if np.unique(constrained).size != constrained.size:
         raise BadInputError("duplicate constrained indices")
     check_psd(A)
-

@@ -70,7 +70,8 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from signorini.solvers.certificate import KKTError, NotConvergedError
+from signorini.solvers import certificate
+from signorini.solvers.certificate import KKTError, NotConvergedError, abs_product
 from signorini.solvers.pdas import StepCallback, certified_result, clamped_values, initial_active, iterate, prepare_qp
 from signorini.solvers.result import SolveResult
 
@@ -244,8 +245,16 @@ class GalerkinHierarchy:
             level.A = sp.csr_matrix(level.A)
             level.A.sum_duplicates()
             level.A.sort_indices()
-        # the fine operator in A's own pattern (explicit zeros kept), updated in place
-        self.levels[0].A = sp.csr_matrix((A.data.copy(), A.indices, A.indptr), shape=A.shape)
+        # the fine operator in A's own pattern (explicit zeros kept), updated in place: on a large
+        # grid its stencil and the rows that differ (no copy of A's values), else a copy of A
+        fine = None
+        if self.grid is not None and len(self.levels) > 1 and A.shape[0] >= certificate.COMPILED_MIN_UNKNOWNS:
+            from signorini.solvers.stencil import StencilOperator
+
+            side = self.grid[0].size
+            fine = StencilOperator.from_csr(A, side * (side // 2) + side // 2)
+        self.levels[0].A = fine or sp.csr_matrix((A.data.copy(), A.indices, A.indptr), shape=A.shape)
+        self.stencil_fine = fine is not None  # the fine level applied by the stencil kernels
         self.free = np.ones(A.shape[0], dtype=bool)  # A itself: every node free
         self.cycles = 0  # V-cycles applied (``__call__``)
         self._factor_coarsest()
@@ -287,8 +296,12 @@ class GalerkinHierarchy:
         starts, ends = A.indptr[S], A.indptr[S + 1]
         pos, rows = _ranges(starts, ends), np.repeat(S, ends - starts)  # the stored entries of rows S
         values = clamped_values(A, rows, free, pos)
-        diff = values - fine.data[pos]
-        fine.data[pos] = values
+        if self.stencil_fine:
+            diff = values - fine.values_at(pos, rows)
+            fine.set_values(pos, rows, values)
+        else:
+            diff = values - fine.data[pos]
+            fine.data[pos] = values
         self.free = free.copy()
         keep = diff != 0.0
         rows, cols, diff = rows[keep], A.indices[pos][keep], diff[keep]
@@ -317,28 +330,21 @@ class GalerkinHierarchy:
     def _cycle(self, lvl: int, b: np.ndarray) -> np.ndarray:
         level = self.levels[lvl]
         x = np.zeros_like(b)
-        level.presmoother(level.A, x, b)
-        coarse_b = level.R @ (b - level.A @ x)
+        stencil = lvl == 0 and self.stencil_fine  # the same sweeps and sums, row by row
+        if stencil:
+            level.A.gauss_seidel(x, b, forward=True)
+            residual = level.A.residual(x, b)
+        else:
+            level.presmoother(level.A, x, b)
+            residual = b - level.A @ x
+        coarse_b = level.R @ residual
         coarse_x = self._coarse(coarse_b) if lvl == len(self.levels) - 2 else self._cycle(lvl + 1, coarse_b)
         x += level.P @ coarse_x
-        level.postsmoother(level.A, x, b)
+        if stencil:
+            level.A.gauss_seidel(x, b, forward=False)
+        else:
+            level.postsmoother(level.A, x, b)
         return x
-
-
-ABS_CHUNK_ROWS = 1 << 20  # rows of |A| formed at a time by ``abs_product``
-
-
-def abs_product(A: sp.csr_matrix, y: np.ndarray) -> np.ndarray:
-    """``|A| y`` for a CSR matrix, formed a block of rows at a time (no copy of ``A``'s values:
-    at N = 4001 one is 0.9 GB)."""
-    out = np.empty(A.shape[0])
-    for start in range(0, A.shape[0], ABS_CHUNK_ROWS):
-        stop = min(start + ABS_CHUNK_ROWS, A.shape[0])
-        lo, hi = A.indptr[start], A.indptr[stop]
-        products = np.abs(A.data[lo:hi]) * y[A.indices[lo:hi]]
-        rows = np.repeat(np.arange(stop - start), np.diff(A.indptr[start : stop + 1]))
-        out[start:stop] = np.bincount(rows, weights=products, minlength=stop - start)
-    return out
 
 
 def pcg(
