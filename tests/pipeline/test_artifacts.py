@@ -47,6 +47,23 @@ def test_npz_roundtrip(tmp_path):
     assert leftovers(path.parent) == []
 
 
+def test_npz_members_read_as_numpy_reads_them(tmp_path):
+    """Members read from the file straight into their arrays are numpy's, dtype, shape, order and
+    bytes (a column-ordered matrix, a 0-d array, an empty one); a compressed archive, which no
+    ``save_npz`` writes, is read through numpy's reader and verified alike."""
+    arrays = ARRAYS | {"columns": np.asfortranarray(np.arange(20.0).reshape(4, 5))}
+    for name, write in (("stored.npz", np.savez), ("compressed.npz", np.savez_compressed)):
+        path = tmp_path / name
+        checksum = np.frombuffer(artifacts._digest(arrays).encode(), dtype=np.uint8)
+        write(path, _checksum=checksum, **arrays)
+        loaded = load_npz(path)
+        with np.load(path) as reference:
+            for key in arrays:
+                assert loaded[key].dtype == reference[key].dtype and loaded[key].shape == reference[key].shape
+                assert loaded[key].flags.f_contiguous == reference[key].flags.f_contiguous
+                assert loaded[key].tobytes(order="A") == reference[key].tobytes(order="A")
+
+
 def test_npz_overwrite_replaces_the_file(tmp_path):
     path = tmp_path / "u.npz"
     save_npz(path, u=np.zeros(3))

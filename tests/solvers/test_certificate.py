@@ -156,9 +156,10 @@ def test_abs_product_is_the_product_with_the_absolute_matrix_bit_for_bit(monkeyp
 
 
 @pytest.mark.parametrize("seed", [4, 9])
-def test_the_compiled_asymmetry_is_the_largest_entry_of_a_minus_its_transpose(monkeypatch, seed):
-    """The symmetry check without forming ``Aᵀ`` gives numpy's value: entries stored on one side
-    only, entries on both sides with different values, and a symmetric matrix (0)."""
+def test_the_compiled_checks_give_numpys_values(monkeypatch, seed):
+    """The symmetry and dominance checks in one compiled pass (no ``Aᵀ``, no ``|A|``) give numpy's
+    values: entries stored on one side only, entries on both sides with different values, a
+    symmetric matrix (0), a diagonally dominant one and one that is not."""
     from signorini.solvers import certificate
 
     A = _signed_random(300, seed)
@@ -167,7 +168,11 @@ def test_the_compiled_asymmetry_is_the_largest_entry_of_a_minus_its_transpose(mo
     T = S.tolil()
     T[3, 5] = T[3, 5] + 1e-3  # one entry off its mirror
     T = sp.csr_matrix(T)
-    numpy_values = [certificate.asymmetry(M) for M in (A, S, T)]
+    D = sp.csr_matrix(S + sp.diags(np.asarray(abs(S).sum(axis=1)).ravel() + 1.0))
+    matrices = (A, S, T, D)
+    numpy_values = [certificate.symmetry_and_dominance(M) for M in matrices]
     monkeypatch.setattr(certificate, "COMPILED_MIN_UNKNOWNS", 0)
-    assert [certificate.asymmetry(M) for M in (A, S, T)] == numpy_values
-    assert numpy_values[0] > 0.0 and numpy_values[1] == 0.0 and numpy_values[2] == pytest.approx(1e-3, rel=1e-9)
+    assert [certificate.symmetry_and_dominance(M) for M in matrices] == numpy_values
+    assert [v[1] > 0.0 for v in numpy_values] == [True, False, True, False]
+    assert numpy_values[2][1] == pytest.approx(1e-3, rel=1e-9)
+    assert [v[2] for v in numpy_values] == [False, False, False, True]

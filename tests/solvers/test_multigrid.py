@@ -229,6 +229,24 @@ def test_the_grid_transfer_is_p1_interpolation(N, diagonal):
         assert P.getnnz(axis=1).max() == 2  # nested: each fine vertex on a coarse edge or vertex
 
 
+@pytest.mark.parametrize("N", [16, 17, 21, 40])
+@pytest.mark.parametrize("diagonal", ["sw_ne", "nw_se"])
+def test_the_compiled_grid_transfer_has_the_same_arrays(monkeypatch, N, diagonal):
+    """The transfer built row by row in a compiled kernel (large grids) is numpy's, array for array
+    and bit for bit, odd grids' three-cell last interval and the second coarsening included."""
+    from signorini.solvers import certificate
+
+    lines = np.arange(N + 1)
+    pairs = [(lines, coarse_lines(lines)), (coarse_lines(lines), coarse_lines(coarse_lines(lines)))]
+    expected = [fk_transfer(fine, coarse, diagonal) for fine, coarse in pairs]
+    monkeypatch.setattr(certificate, "COMPILED_MIN_UNKNOWNS", 0)
+    for (fine, coarse), P in zip(pairs, expected, strict=True):
+        Q = fk_transfer(fine, coarse, diagonal)
+        for name in ("indptr", "indices", "data"):
+            a, b = getattr(P, name), getattr(Q, name)
+            assert a.dtype == b.dtype and a.tobytes() == b.tobytes(), name
+
+
 def test_geometric_levels_are_cheaper_and_give_the_same_solution(cache):
     """On a Friedrichs–Keller matrix the geometric hierarchy halves the grid down to the coarsest
     level, with an operator complexity near 4/3 (classical AMG: above 2), and the route gives the

@@ -34,9 +34,9 @@ def _assert_applies_as_csr(op: StencilOperator, M: sp.csr_matrix, rng) -> None:
     x, b = rng.standard_normal(n), rng.standard_normal(n)
     assert _same(op @ x, M @ x)
     assert _same(op.residual(x, b), b - M @ x)
-    for forward in (True, False):
-        got, expected = x.copy(), x.copy()
-        op.gauss_seidel(got, b, forward)
+    for start, forward, from_zero in ((x, True, False), (x, False, False), (np.zeros(n), True, True)):
+        got, expected = start.copy(), start.copy()
+        op.gauss_seidel(got, b, forward, from_zero)
         amg_core.gauss_seidel(M.indptr, M.indices, M.data, expected, b, *((0, n, 1) if forward else (n - 1, -1, -1)))
         assert _same(got, expected)
     assert _same(op.tocsr().toarray(), M.toarray())

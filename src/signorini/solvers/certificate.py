@@ -145,14 +145,19 @@ def abs_product(A: sp.csr_matrix, y: np.ndarray) -> np.ndarray:
     return out
 
 
-def asymmetry(A: sp.csr_matrix) -> float:
-    """``max |A - Aᵀ|`` over the stored entries (``A`` in canonical CSR form): compiled for large
-    matrices without forming ``Aᵀ``, else through it."""
+def symmetry_and_dominance(A: sp.csr_matrix) -> tuple[float, float, bool]:
+    """``max |A_ij|``, ``max |A - Aᵀ|`` over the stored entries and whether every row has
+    ``A_ii ≥ Σ_{j≠i} |A_ij|`` (to 1e-12 A_ii), for ``A`` in canonical CSR form: in one compiled pass
+    for large matrices (no ``Aᵀ``, no ``|A|``), else with numpy."""
     if A.shape[0] >= COMPILED_MIN_UNKNOWNS:
-        from signorini.solvers.kernels import asymmetry_rows
+        from signorini.solvers.kernels import symmetry_and_dominance as compiled
 
-        return float(asymmetry_rows(A.indptr, A.indices, A.data))
-    return float(np.abs((A - A.T).data).max(initial=0.0))
+        top, asym, dominant = compiled(A.indptr, A.indices, A.data)
+        return float(top), float(asym), bool(dominant)
+    d = A.diagonal()
+    off = abs_product(A, np.ones(A.shape[1])) - np.abs(d)
+    top = float(np.abs(A.data).max(initial=0.0))
+    return top, float(np.abs((A - A.T).data).max(initial=0.0)), bool(np.all(d >= off - 1e-12 * d))
 
 
 def check_psd(A: sp.spmatrix) -> None:
@@ -173,20 +178,18 @@ def check_psd(A: sp.spmatrix) -> None:
         A = A.copy()
         A.sum_duplicates()
         A.sort_indices()
-    scale = max(float(np.abs(A.data).max(initial=0.0)), _TINY)
-    asym = asymmetry(A)
+    top, asym, dominant = symmetry_and_dominance(A)
+    scale = max(top, _TINY)
     if asym > SYMMETRY_RTOL * scale:
         raise BadInputError(
             f"matrix is not symmetric: max |A - Aᵀ| = {asym:.2e} = {asym / scale:.1e} max |A| "
             f"(tolerance {SYMMETRY_RTOL:.0e})"
         )
-    d = A.diagonal()
-    off = abs_product(A, np.ones(A.shape[1])) - np.abs(d)
-    if np.all(d >= off - 1e-12 * d):  # weakly diagonally dominant, positive diagonal: PSD
+    if dominant:  # weakly diagonally dominant, positive diagonal (check_qp_data): PSD
         return
     from signorini.solvers.linalg import is_positive_definite
 
-    if not is_positive_definite(A + PSD_SHIFT * sp.diags(d)):
+    if not is_positive_definite(A + PSD_SHIFT * sp.diags(A.diagonal())):
         raise BadInputError(
             "matrix is not positive semidefinite (Cholesky factorisation of A + 1e-8 diag(A) fails): "
             "the QP is non-convex and has no minimiser in general"

@@ -26,13 +26,20 @@ def abs_product_rows(indptr, indices, data, y, out):  # pragma: no cover - compi
 
 
 @numba.njit(cache=True)
-def asymmetry_rows(indptr, indices, data):  # pragma: no cover - compiled
-    """``max |A - Aᵀ|`` over the stored entries of a CSR matrix with sorted indices, without
-    forming ``Aᵀ``: each ``A_ij`` against ``A_ji`` found by bisection in row j (0 if not stored)."""
-    top = 0.0
+def symmetry_and_dominance(indptr, indices, data):  # pragma: no cover - compiled
+    """One pass over a CSR matrix with sorted indices: ``max |A_ij|``; ``max |A - Aᵀ|`` over the
+    stored entries without forming ``Aᵀ`` (each ``A_ij`` against ``A_ji`` found by bisection in
+    row j, 0 if not stored); and whether every row has ``A_ii ≥ Σ_{j≠i} |A_ij| - 1e-12 A_ii``
+    (the off-diagonal sum as ``|A| 1 - |A_ii|``, ``|A| 1`` summed in CSR order)."""
+    top, asym, dominant = 0.0, 0.0, True
     for i in range(indptr.size - 1):
+        total, diag = 0.0, 0.0
         for jj in range(indptr[i], indptr[i + 1]):
-            j = indices[jj]
+            j, value = indices[jj], data[jj]
+            top = max(top, abs(value))
+            total += abs(value) * 1.0
+            if j == i:
+                diag = value
             lo, hi = indptr[j], indptr[j + 1]
             while lo < hi:
                 mid = (lo + hi) // 2
@@ -41,8 +48,10 @@ def asymmetry_rows(indptr, indices, data):  # pragma: no cover - compiled
                 else:
                     hi = mid
             mirror = data[lo] if lo < indptr[j + 1] and indices[lo] == i else 0.0
-            top = max(top, abs(data[jj] - mirror))
-    return top
+            asym = max(asym, abs(value - mirror))
+        if not diag >= (total - abs(diag)) - 1e-12 * diag:
+            dominant = False
+    return top, asym, dominant
 
 
 @numba.njit(cache=True)
@@ -105,3 +114,41 @@ def gauss_seidel(
                     rsum += ex_data[jj] * x[j]
         if diag != 0.0:
             x[i] = (b[i] - rsum) / diag
+
+
+@numba.njit(cache=True)
+def _fk_weights(ci, cj, fx, fy, nc, sw_ne):  # pragma: no cover - compiled
+    """The three (column, weight) of a fine vertex in ``multigrid.fk_transfer``'s order and
+    arithmetic."""
+    if sw_ne:
+        below = fx >= fy
+        c0, w0 = ci * nc + cj, (1.0 - fx) if below else (1.0 - fy)
+        c1, w1 = ((ci + 1) * nc + cj) if below else (ci * nc + cj + 1), abs(fx - fy)
+        c2, w2 = (ci + 1) * nc + cj + 1, fy if below else fx
+    else:
+        below = fx + fy <= 1.0
+        c0, w0 = (ci * nc + cj) if below else ((ci + 1) * nc + cj + 1), abs(1.0 - fx - fy)
+        c1, w1 = (ci + 1) * nc + cj, fx if below else (1.0 - fy)
+        c2, w2 = ci * nc + cj + 1, fy if below else (1.0 - fx)
+    return c0, w0, c1, w1, c2, w2
+
+
+@numba.njit(cache=True)
+def fk_transfer_rows(cell, frac, nc, sw_ne):  # pragma: no cover - compiled
+    """The CSR arrays of ``multigrid.fk_transfer`` for grid lines with coarse ``cell`` and position
+    ``frac`` in it (the same in x and y): two passes, counting and then filling, so no array is
+    larger than the result."""
+    n = cell.size
+    indptr = np.zeros(n * n + 1, np.int32)
+    for r in range(n * n):
+        c0, w0, c1, w1, c2, w2 = _fk_weights(cell[r // n], cell[r % n], frac[r // n], frac[r % n], nc, sw_ne)
+        indptr[r + 1] = indptr[r] + (w0 > 1e-12) + (w1 > 1e-12) + (w2 > 1e-12)
+    indices, data = np.empty(indptr[-1], np.int32), np.empty(indptr[-1])
+    for r in range(n * n):
+        c0, w0, c1, w1, c2, w2 = _fk_weights(cell[r // n], cell[r % n], frac[r // n], frac[r % n], nc, sw_ne)
+        k = indptr[r]
+        for c, w in ((c0, w0), (c1, w1), (c2, w2)):
+            if w > 1e-12:
+                indices[k], data[k] = c, w
+                k += 1
+    return indptr, indices, data

@@ -133,6 +133,12 @@ def fk_transfer(lines: np.ndarray, coarse: np.ndarray, diagonal: str) -> sp.csr_
     (i, j), unknown i · len(lines) + j, takes the coarse P1 function's value there (the
     barycentric weights of the coarse triangle holding it: 1 and ½, thirds in an odd grid's last cell)."""
     n, nc = lines.size, coarse.size
+    if n * n >= certificate.COMPILED_MIN_UNKNOWNS:  # the same arrays, row by row
+        from signorini.solvers.kernels import fk_transfer_rows
+
+        cell, frac = _interval(lines, coarse)
+        indptr, indices, data = fk_transfer_rows(cell, frac, nc, diagonal == "sw_ne")
+        return sp.csr_matrix((data, indices, indptr), shape=(n * n, nc * nc))
     (cell_x, fx), (cell_y, fy) = _interval(lines, coarse), _interval(lines, coarse)
     cell_i, cell_j = np.repeat(cell_x, n), np.tile(cell_y, n)
     fx, fy = np.repeat(fx, n), np.tile(fy, n)
@@ -332,7 +338,7 @@ class GalerkinHierarchy:
         x = np.zeros_like(b)
         stencil = lvl == 0 and self.stencil_fine  # the same sweeps and sums, row by row
         if stencil:
-            level.A.gauss_seidel(x, b, forward=True)
+            level.A.gauss_seidel(x, b, forward=True, from_zero=True)
             residual = level.A.residual(x, b)
         else:
             level.presmoother(level.A, x, b)

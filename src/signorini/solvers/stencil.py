@@ -104,8 +104,14 @@ class StencilOperator:
         )
         return sp.csr_matrix((data, self._indices, self._indptr), shape=self.shape)
 
-    def _stencil(self, without_diagonal: bool = False) -> tuple[tuple, tuple]:
-        keep = [k for k in range(self.offsets.size) if not (without_diagonal and k == self.diagonal_at)]
+    def _stencil(self, without_diagonal: bool = False, lower_only: bool = False) -> tuple[tuple, tuple]:
+        """The stencil's offsets and values as tuples (the kernels unroll loops over them): all,
+        without the diagonal entry, or only the entries left of the diagonal."""
+        keep = [
+            k
+            for k in range(self.offsets.size)
+            if not (without_diagonal and k == self.diagonal_at) and not (lower_only and self.offsets[k] >= 0)
+        ]
         return tuple(int(self.offsets[k]) for k in keep), tuple(float(self.values[k]) for k in keep)
 
     def __matmul__(self, x: np.ndarray) -> np.ndarray:
@@ -120,10 +126,14 @@ class StencilOperator:
         kernels.apply(x, b, r, True, self.kind, *self._stencil(), self.ex_indptr, self.ex_indices, self.ex_data)
         return r
 
-    def gauss_seidel(self, x: np.ndarray, b: np.ndarray, forward: bool) -> None:
-        """One Gauss–Seidel sweep on ``x`` in place, forward or backward."""
+    def gauss_seidel(self, x: np.ndarray, b: np.ndarray, forward: bool, from_zero: bool = False) -> None:
+        """One Gauss–Seidel sweep on ``x`` in place, forward or backward.  ``from_zero``: ``x`` is
+        zero and the sweep forward, so a stencil row's entries right of the diagonal multiply zeros
+        and are left out (adding ±0 to a sum that starts at +0 changes none of its bits; the chain
+        each row waits on is shorter)."""
         n = self.shape[0]
         start, stop, step = (0, n, 1) if forward else (n - 1, -1, -1)
         diagonal = float(self.values[self.diagonal_at]) if self.diagonal_at >= 0 else 0.0
         others = (self.ex_indptr, self.ex_indices, self.ex_data)
-        kernels.gauss_seidel(x, b, start, stop, step, self.kind, *self._stencil(True), diagonal, *others)
+        stencil = self._stencil(True, lower_only=from_zero and forward)
+        kernels.gauss_seidel(x, b, start, stop, step, self.kind, *stencil, diagonal, *others)
