@@ -5,7 +5,7 @@
   ``w_h`` (Definition 3.1, with the problem's reaction coefficient: ``∫ ∇R_h u·∇w + c R_h u w
   = ∫ ∇u·∇w + c u w``), its right-hand side from the exact ``u`` and ``∇u`` by quadrature over
   chunks of triangles, its system ``(K + c M) r = ...`` solved by conjugate gradients with the
-  multigrid route's algebraic multigrid V-cycle (``ritz_solve``): time and memory in O(n), where
+  multigrid route's V-cycle (``ritz_solve``): time and memory in O(n), where
   a sparse factorisation took more than twice the time and memory at N = 2001
   (``docs/evidence/stage_jobs_N2001.json``, baseline against tree) and needs more than this
   machine at N = 4001.  It is
@@ -76,25 +76,24 @@ def ritz_solve(
     A: sp.spmatrix, rhs: np.ndarray, start: np.ndarray | None = None, info: dict | None = None
 ) -> np.ndarray:
     """``x`` with ``A x = rhs`` (``A`` symmetric positive definite) by conjugate gradients
-    preconditioned with one multigrid V-cycle (the multigrid route's geometric
-    ``hierarchy`` and ``pcg``), from ``start`` (zero if None) to the energy-relative accuracy
-    ``RITZ_TOL``.  ``info``, when given, receives the iterations, the final energy residual and
-    the seconds of the set-up and of the iteration.  Raises ``NotConvergedError`` when CG does
-    not reach ``RITZ_TOL`` within ``RITZ_MAX_ITER`` iterations."""
-    from signorini.solvers.multigrid import hierarchy, pcg
+    preconditioned with one V-cycle of the multigrid route (its ``GalerkinHierarchy`` of ``A``,
+    every node free, and its ``pcg``), from ``start`` (zero if None) to the energy-relative
+    accuracy ``RITZ_TOL``.  ``info``, when given, receives the iterations, the final energy
+    residual and the seconds of the set-up and of the iteration.  Raises ``NotConvergedError``
+    when CG does not reach ``RITZ_TOL`` within ``RITZ_MAX_ITER`` iterations."""
+    from signorini.solvers.multigrid import GalerkinHierarchy, pcg
 
     A = sp.csr_matrix(A)
     t0 = time.perf_counter()
-    amg = hierarchy(A)
-    vcycle = amg.aspreconditioner(cycle="V")
+    vcycle = GalerkinHierarchy(A)
     t1 = time.perf_counter()
     x0 = np.zeros_like(rhs) if start is None else np.asarray(start, dtype=float)
-    x, iterations, ratio = pcg(A, rhs, x0, vcycle.matvec, RITZ_TOL, RITZ_MAX_ITER)
+    x, iterations, ratio = pcg(vcycle.matrix, rhs, x0, vcycle, RITZ_TOL, RITZ_MAX_ITER)
     if info is not None:
         info.update(
-            method="CG, geometric multigrid V-cycle" if amg.grid else "CG, classical AMG V-cycle",
-            levels=len(amg.levels),
-            operator_complexity=float(amg.operator_complexity()),
+            method="CG, geometric multigrid V-cycle" if vcycle.grid else "CG, classical AMG V-cycle",
+            levels=len(vcycle.levels),
+            operator_complexity=float(vcycle.operator_complexity()),
             tol=RITZ_TOL,
             iterations=iterations,
             energy_residual=float(ratio),
