@@ -313,3 +313,18 @@ def test_the_triangles_left_out_of_the_load_vector_have_no_quadrature_point_in_t
     (_, x, _, _), *_ = quadrature_chunks(mesh, chunk=mesh.t.shape[1])
     inside = (np.hypot(x[0] - centre[0], x[1] - centre[1]) < radius).any(axis=1)
     assert np.all(keep[inside]) and 0 < keep.sum() < keep.size
+
+
+def test_accumulating_over_the_band_of_a_chunk_equals_the_full_sum_bit_for_bit():
+    """``accumulate`` adds a chunk's weights over the vertices it touches only: the same bytes as
+    adding the full-length ``bincount``, over several chunks (repeated indices, an empty chunk)."""
+    from signorini.fem.assembly import accumulate
+
+    rng = np.random.default_rng(5)
+    full, banded = np.zeros(1000), np.zeros(1000)
+    for lo, size in ((200, 300), (0, 50), (950, 120), (400, 0), (210, 500)):
+        index = np.minimum(lo + rng.integers(0, 60, size=size), 999)
+        weights = rng.standard_normal(size)
+        full += np.bincount(index, weights, minlength=1000)
+        accumulate(banded, index, weights)
+    assert banded.tobytes() == full.tobytes()

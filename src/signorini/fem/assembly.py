@@ -280,6 +280,18 @@ def fk_stencil_matrix(mesh: MeshTri, N: int, c: float, band: int = STENCIL_BAND)
     return A
 
 
+def accumulate(b: np.ndarray, index: np.ndarray, weights: np.ndarray) -> None:
+    """``b += np.bincount(index, weights, minlength=b.size)``, bit for bit, over the entries
+    ``index`` spans only: a chunk of consecutive triangles touches a narrow band of the vertices,
+    and the sum over all of ``b`` per chunk would cost more than the chunk's own work on a fine
+    mesh.  Outside the band the full sum adds ``+0.0``, which changes nothing in a ``b`` that holds
+    no ``-0.0`` (one that starts at ``+0.0`` and only ever adds)."""
+    if index.size == 0:
+        return
+    lo, hi = int(index.min()), int(index.max())
+    b[lo : hi + 1] += np.bincount(index - lo, weights, minlength=hi - lo + 1)
+
+
 def load_vector(target: Basis | MeshTri, problem: Problem, chunk: int = CHUNK_ELEMENTS) -> np.ndarray:
     """b_i = ∫ f φ_i, streamed over chunks of at most ``chunk`` triangles.
 
@@ -298,7 +310,7 @@ def load_vector(target: Basis | MeshTri, problem: Problem, chunk: int = CHUNK_EL
         fx = problem.f(x)
         values = [np.broadcast_to(v, dx.shape) for v in p1_values(X)]
         weights = np.concatenate([np.sum(fx * v * dx, axis=1) for v in values])
-        b += np.bincount(t.ravel(), weights, minlength=n)  # sequential, as scipy's COO-to-dense sum
+        accumulate(b, t.ravel(), weights)  # sequential, as scipy's COO-to-dense sum
         del x, fx, dx, weights
     return b
 

@@ -33,7 +33,7 @@ from skfem import MeshTri
 from skfem.quadrature import get_quadrature
 from skfem.refdom import RefTri
 
-from signorini.fem.assembly import CHUNK_ELEMENTS, INTORDER, p1_values, quadrature_chunks, system_matrix
+from signorini.fem.assembly import CHUNK_ELEMENTS, INTORDER, accumulate, p1_values, quadrature_chunks, system_matrix
 from signorini.fem.derivatives import u_and_grad_u
 from signorini.fem.mesh import boundary_nodes
 from signorini.fem.problem import Problem
@@ -67,7 +67,7 @@ def ritz_rhs(problem: Problem, mesh: MeshTri, chunk: int = CHUNK_ELEMENTS) -> np
         mass = (u * dx) @ values.T  # ∫_T u φ_k, (E, 3)
         for k in range(3):
             grad_phi = np.einsum("ije,i->je", inv, _REFERENCE_GRADIENTS[k])  # J⁻ᵀ ∇̂φ_k, (2, E)
-            b += np.bincount(t[k], flux[0] * grad_phi[0] + flux[1] * grad_phi[1] + problem.c * mass[:, k], minlength=n)
+            accumulate(b, t[k], flux[0] * grad_phi[0] + flux[1] * grad_phi[1] + problem.c * mass[:, k])
         del x, dx, u, gu, flux, mass
     return b
 
