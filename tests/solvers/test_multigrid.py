@@ -229,6 +229,23 @@ def test_the_grid_transfer_is_p1_interpolation(N, diagonal):
         assert P.getnnz(axis=1).max() == 2  # nested: each fine vertex on a coarse edge or vertex
 
 
+def test_the_compiled_grid_reading_gives_numpys_answer(monkeypatch):
+    """The grid read off the matrix in one compiled pass: the same answer as numpy's for both
+    diagonals, the 5-point stencil of c = 0, a jittered mesh's matrix and matrices of no grid."""
+    from signorini.solvers import certificate
+
+    cases = [(c, diagonal) for c in (0.0, 1.0) for diagonal in ("sw_ne", "nw_se")]
+    matrices = [sp.csr_matrix(build(Problem(c=c), 21, diagonal).A) for c, diagonal in cases]
+    matrices += [sp.csr_matrix(system_matrix(friedrichs_keller(21, jitter=0.3, seed=2), 1.0))]
+    matrices += [sp.random(484, 484, density=0.02, random_state=1, format="csr"), sp.eye(484, format="csr")]
+    expected = [fk_grid(M) for M in matrices]
+    monkeypatch.setattr(certificate, "COMPILED_MIN_UNKNOWNS", 0)
+    assert [fk_grid(M) for M in matrices] == expected
+    # c = 0 stores no diagonal coupling: either diagonal serves, sw_ne is named
+    assert expected[:4] == [(21, "sw_ne"), (21, "sw_ne"), (21, "sw_ne"), (21, "nw_se")]
+    assert expected[-2] is None
+
+
 @pytest.mark.parametrize("N", [16, 17, 21, 40])
 @pytest.mark.parametrize("diagonal", ["sw_ne", "nw_se"])
 def test_the_compiled_grid_transfer_has_the_same_arrays(monkeypatch, N, diagonal):

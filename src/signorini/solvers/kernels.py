@@ -152,3 +152,20 @@ def fk_transfer_rows(cell, frac, nc, sw_ne):  # pragma: no cover - compiled
                 indices[k], data[k] = c, w
                 k += 1
     return indptr, indices, data
+
+
+@numba.njit(cache=True)
+def row_reach(indptr, indices, N):  # pragma: no cover - compiled
+    """For ``multigrid.fk_grid``, over the rows with at least two entries (sorted indices): the
+    smallest offset of a first entry and the largest of a last entry (0 if none), whether a last
+    entry lies at offset N + 2, and whether a last or next-to-last entry lies at offset N."""
+    lowest, highest, sw_ne, nw_se = 0, 0, False, False
+    for i in range(indptr.size - 1):
+        first, last = indptr[i], indptr[i + 1] - 1
+        if last - first < 1:
+            continue
+        high = indices[last] - i
+        lowest, highest = min(lowest, indices[first] - i), max(highest, high)
+        sw_ne = sw_ne or high == N + 2
+        nw_se = nw_se or high == N or indices[last - 1] - i == N
+    return lowest, highest, sw_ne, nw_se

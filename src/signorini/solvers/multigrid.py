@@ -100,12 +100,18 @@ def fk_grid(A: sp.csr_matrix) -> tuple[int, str] | None:
     if N < 2 or (N + 1) ** 2 != A.shape[0]:
         return None
     A = A if A.has_sorted_indices else A.sorted_indices()
-    rows = np.flatnonzero(np.diff(A.indptr) >= 2)
-    first, last = A.indptr[rows], A.indptr[rows + 1] - 1
-    low, high, before_last = (A.indices[k] - rows for k in (first, last, last - 1))
-    if min(low.min(initial=0), -high.max(initial=0)) < -(N + 2):
+    if A.shape[0] >= certificate.COMPILED_MIN_UNKNOWNS:  # the same four facts in one pass
+        from signorini.solvers.kernels import row_reach
+
+        lowest, highest, sw_ne, nw_se = row_reach(A.indptr, A.indices, N)
+    else:
+        rows = np.flatnonzero(np.diff(A.indptr) >= 2)
+        first, last = A.indptr[rows], A.indptr[rows + 1] - 1
+        low, high, before_last = (A.indices[k] - rows for k in (first, last, last - 1))
+        lowest, highest = low.min(initial=0), high.max(initial=0)
+        sw_ne, nw_se = bool((high == N + 2).any()), bool(((before_last == N) | (high == N)).any())
+    if min(lowest, -highest) < -(N + 2):
         return None
-    sw_ne, nw_se = bool((high == N + 2).any()), bool(((before_last == N) | (high == N)).any())
     if sw_ne and nw_se:
         return None
     return N, "nw_se" if nw_se else "sw_ne"
