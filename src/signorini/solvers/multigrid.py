@@ -257,19 +257,35 @@ class GalerkinHierarchy:
             level.A = sp.csr_matrix(level.A)
             level.A.sum_duplicates()
             level.A.sort_indices()
-        # the fine operator in A's own pattern (explicit zeros kept), updated in place: on a large
-        # grid its stencil and the rows that differ (no copy of A's values), else a copy of A
-        fine = None
-        if self.grid is not None and len(self.levels) > 1 and A.shape[0] >= certificate.COMPILED_MIN_UNKNOWNS:
-            from signorini.solvers.stencil import StencilOperator
-
-            side = self.grid[0].size
-            fine = StencilOperator.from_csr(A, side * (side // 2) + side // 2)
-        self.levels[0].A = fine or sp.csr_matrix((A.data.copy(), A.indices, A.indptr), shape=A.shape)
-        self.stencil_fine = fine is not None  # the fine level applied by the stencil kernels
+        # the fine operator in A's own pattern (explicit zeros kept), updated in place; every
+        # level but the coarsest of a large grid as its stencil and the rows that differ (the fine
+        # one without a copy of A's values), applied by the stencil kernels
+        self.levels[0].A = A
+        self.stencil_levels = self._stencils()
+        if not self.stencil_levels[0]:
+            self.levels[0].A = sp.csr_matrix((A.data.copy(), A.indices, A.indptr), shape=A.shape)
         self.free = np.ones(A.shape[0], dtype=bool)  # A itself: every node free
         self.cycles = 0  # V-cycles applied (``__call__``)
         self._factor_coarsest()
+
+    def _stencils(self) -> list[bool]:
+        """Replace every level's operator but the coarsest's by a ``StencilOperator`` where the
+        hierarchy follows a grid and the level has at least ``COMPILED_MIN_UNKNOWNS`` unknowns;
+        which levels were."""
+        found = [False] * len(self.levels)
+        if self.grid is None or len(self.levels) < 2:  # one level: the coarsest, factorised
+            return found
+        lines = self.grid[0]
+        for k, level in enumerate(self.levels[:-1]):
+            if level.A.shape[0] >= certificate.COMPILED_MIN_UNKNOWNS:
+                from signorini.solvers.stencil import StencilOperator
+
+                side = lines.size
+                op = StencilOperator.from_csr(level.A, side * (side // 2) + side // 2)
+                if op is not None:
+                    level.A, found[k] = op, True
+            lines = coarse_lines(lines)
+        return found
 
     @property
     def matrix(self) -> sp.csr_matrix:
@@ -308,7 +324,7 @@ class GalerkinHierarchy:
         starts, ends = A.indptr[S], A.indptr[S + 1]
         pos, rows = _ranges(starts, ends), np.repeat(S, ends - starts)  # the stored entries of rows S
         values = clamped_values(A, rows, free, pos)
-        if self.stencil_fine:
+        if self.stencil_levels[0]:
             diff = values - fine.values_at(pos, rows)
             fine.set_values(pos, rows, values)
         else:
@@ -317,7 +333,7 @@ class GalerkinHierarchy:
         self.free = free.copy()
         keep = diff != 0.0
         rows, cols, diff = rows[keep], A.indices[pos][keep], diff[keep]
-        for level, coarse in zip(self.levels[:-1], self.levels[1:], strict=True):
+        for k, (level, coarse) in enumerate(zip(self.levels[:-1], self.levels[1:], strict=True), start=1):
             S = np.unique(rows)  # Δ is symmetric: its rows are its support
             delta = sp.csr_matrix((diff, (np.searchsorted(S, rows), np.searchsorted(S, cols))), shape=(S.size,) * 2)
             PS = level.P[S]
@@ -327,8 +343,11 @@ class GalerkinHierarchy:
             rows, cols, diff = support[image.row], support[image.col], image.data
             where = _positions(coarse.A, rows, cols) if rows.size else np.zeros(0, dtype=np.int64)
             if where is None:  # an entry outside the stored pattern (exact cancellation in the setup)
-                coarse.A = sp.csr_matrix(coarse.A + sp.csr_matrix((diff, (rows, cols)), shape=coarse.A.shape))
+                coarse.A = sp.csr_matrix(coarse.A.tocsr() + sp.csr_matrix((diff, (rows, cols)), shape=coarse.A.shape))
                 coarse.A.sort_indices()
+                self.stencil_levels[k] = False
+            elif self.stencil_levels[k]:
+                coarse.A.add_values(where, rows, diff)
             else:
                 np.add.at(coarse.A.data, where, diff)
         self._factor_coarsest()
@@ -342,7 +361,7 @@ class GalerkinHierarchy:
     def _cycle(self, lvl: int, b: np.ndarray) -> np.ndarray:
         level = self.levels[lvl]
         x = np.zeros_like(b)
-        stencil = lvl == 0 and self.stencil_fine  # the same sweeps and sums, row by row
+        stencil = self.stencil_levels[lvl]  # the same sweeps and sums, row by row
         if stencil:
             level.A.gauss_seidel(x, b, forward=True, from_zero=True)
             residual = level.A.residual(x, b)
@@ -507,11 +526,11 @@ def nested_start(H: GalerkinHierarchy, b: np.ndarray, B: np.ndarray, options: di
     constrained = np.zeros(b.size, dtype=bool)
     constrained[B] = True
     fine_vertex = (at[:, None] * lines.size + at[None, :]).ravel()
-    level = H.levels[0]
+    level, operator = H.levels[0], H.levels[1].A
     try:
         coarse_result = multigrid_solve(
-            H.levels[1].A.copy(), level.R @ b, np.flatnonzero(constrained[fine_vertex]), **options,
-            grid=(coarse, diagonal),
+            operator.tocsr() if H.stencil_levels[1] else operator.copy(), level.R @ b,
+            np.flatnonzero(constrained[fine_vertex]), **options, grid=(coarse, diagonal),
         )
     except (NotConvergedError, KKTError) as err:
         log.warning("nested start on %d cells failed (%s); solving from the plain cold start", coarse.size - 1, err)

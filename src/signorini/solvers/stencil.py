@@ -75,6 +75,16 @@ class StencilOperator:
         if new.size:
             self._others(np.union1d(self.rows, new))
 
+    @property
+    def indptr(self) -> np.ndarray:
+        """The row pointers of the CSR pattern the operator came from (positions address it)."""
+        return self._indptr
+
+    @property
+    def indices(self) -> np.ndarray:
+        """The column indices of that pattern."""
+        return self._indices
+
     def _where(self, positions: np.ndarray, rows: np.ndarray) -> np.ndarray:
         return self.ex_indptr[self.kind[rows]] + (positions - self._indptr[rows])
 
@@ -90,6 +100,10 @@ class StencilOperator:
         """Set the entries at ``positions`` of ``A.data`` (their rows are stored apart first)."""
         self._promote(rows[self.kind[rows] < 0])
         self.ex_data[self._where(positions, rows)] = values
+
+    def add_values(self, positions: np.ndarray, rows: np.ndarray, increments: np.ndarray) -> None:
+        """Add ``increments`` to the entries at distinct ``positions`` (``np.add.at`` on a CSR copy)."""
+        self.set_values(positions, rows, self.values_at(positions, rows) + increments)
 
     def tocsr(self) -> sp.csr_matrix:
         """The matrix as CSR in ``A``'s pattern (a full copy of its values)."""
