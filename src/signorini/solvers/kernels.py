@@ -1,9 +1,9 @@
 """The compiled kernels of the solvers (numba): row-by-row passes over a sparse matrix that numpy
 would make in several passes with temporaries of the matrix's size.
 
-Importing numba and loading the cached kernels costs about 1.3 s per process
-(docs/evidence/design-measurements.md#compiled-kernels), more than they save below a few million
-unknowns: callers import this module only for matrices of at least ``COMPILED_MIN_UNKNOWNS`` rows
+Importing numba and loading the cached kernels costs each process more than they save below a few
+million unknowns (docs/evidence/design-measurements.md#compiled-kernels): callers import this
+module only for matrices of at least ``COMPILED_MIN_UNKNOWNS`` rows
 (``signorini.solvers.certificate``) and otherwise take numpy code that gives the same bits.  Each
 kernel sums a row in the order of its CSR entries from 0.0, as scipy's products and pyamg's
 Gauss–Seidel do.  Compiled once per machine and cached beside this module.
