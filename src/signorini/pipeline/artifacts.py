@@ -236,22 +236,28 @@ def save_npz(path: str | os.PathLike, **arrays: np.ndarray) -> None:
     _atomic_write(path, lambda fh: np.savez(fh, _checksum=checksum, **arrays))
 
 
+def _npy_header(fh) -> tuple[tuple[int, ...], bool, np.dtype]:
+    """``(shape, fortran_order, dtype)`` of the ``.npy`` data starting at ``fh``'s position, which is
+    left at the array's first byte."""
+    fmt = np.lib.format
+    major = fmt.read_magic(fh)[0]
+    return (fmt.read_array_header_1_0 if major == 1 else fmt.read_array_header_2_0)(fh)
+
+
 def _read_member(fh, archive: zipfile.ZipFile, info: zipfile.ZipInfo) -> np.ndarray:
     """One ``.npy`` member: an uncompressed one (``np.savez``) read from the file straight into its
     array, without the copies of ``np.load``'s zip reader (docs/evidence/design-measurements.md#archive-reading);
     any other through ``np.load``'s reader.  The checksum of ``load_npz`` vouches for the bytes
     either way."""
-    fmt = np.lib.format
     if info.compress_type != zipfile.ZIP_STORED or info.flag_bits & 0x1:
-        return fmt.read_array(archive.open(info), allow_pickle=False)
+        return np.lib.format.read_array(archive.open(info), allow_pickle=False)
     fh.seek(info.header_offset)
     local = fh.read(30)  # the local file header: its name and extra field may differ from the directory's
     if len(local) < 30 or local[:4] != b"PK\x03\x04":
         raise zipfile.BadZipFile(f"bad local header of {info.filename}")
     name_len, extra_len = struct.unpack("<HH", local[26:30])
     fh.seek(info.header_offset + 30 + name_len + extra_len)
-    major = fmt.read_magic(fh)[0]
-    shape, fortran, dtype = (fmt.read_array_header_1_0 if major == 1 else fmt.read_array_header_2_0)(fh)
+    shape, fortran, dtype = _npy_header(fh)
     if dtype.hasobject:
         raise ValueError(f"{info.filename}: object arrays are not read")
     array = np.empty(shape, dtype=dtype, order="F" if fortran else "C")
@@ -283,10 +289,7 @@ def load_npz(path: str | os.PathLike) -> dict[str, np.ndarray]:
 def _stream_member(h, archive: zipfile.ZipFile, name: str, chunk: int) -> None:
     """Hash one ``.npy`` member of an archive as ``_digest`` hashes its array, streaming its data."""
     with archive.open(name) as fh:
-        fmt = np.lib.format
-        major = fmt.read_magic(fh)[0]
-        header = fmt.read_array_header_1_0 if major == 1 else fmt.read_array_header_2_0
-        shape, fortran, dtype = header(fh)
+        shape, fortran, dtype = _npy_header(fh)
         h.update(name[: -len(".npy")].encode())
         h.update(str(dtype).encode())
         h.update(str(shape or (1,)).encode())  # np.ascontiguousarray makes a 0-d array 1-d
