@@ -21,6 +21,7 @@ import jupytext
 import pytest
 from helpers import ROOT, clone_built
 from nbclient import NotebookClient
+from traitlets.config import Config
 
 from signorini import explore
 from signorini.pipeline.jobenv import THREAD_VARIABLES
@@ -44,6 +45,21 @@ def test_notebooks_are_present_and_paired():
 
 
 # --- the notebooks, executed -----------------------------------------------------------------------
+
+
+def notebook_client(nb, path: Path, sockets: Path) -> NotebookClient:
+    """A client for the notebook at ``path`` whose kernel talks over Unix-domain sockets named
+    after the notebook in ``sockets``: TCP ports are chosen by binding to port 0 and releasing
+    it before the kernel binds, a window in which any other process on the machine can take the
+    port and the kernel dies at start-up; socket files named per notebook cannot collide."""
+    config = Config({"KernelManager": {"transport": "ipc", "ip": str(sockets / path.stem)}})
+    return NotebookClient(
+        nb,
+        kernel_name=KERNEL,
+        timeout=TIMEOUT_PER_CELL,
+        resources={"metadata": {"path": str(path.parent)}},
+        config=config,
+    )
 
 
 @pytest.fixture(scope="module")
@@ -73,17 +89,14 @@ def notebook_env(tmp_path_factory, built_repo):
 
 
 @pytest.fixture(scope="module")
-def executed(notebook_env):
+def executed(notebook_env, tmp_path_factory):
     """Every notebook executed once, all concurrently (one kernel each): {name: (notebook, error, seconds)}."""
+    sockets = tmp_path_factory.mktemp("sockets")
 
     async def run(path: Path):
-        nb = jupytext.read(notebook_env / "notebooks" / path.name)
-        client = NotebookClient(
-            nb,
-            kernel_name=KERNEL,
-            timeout=TIMEOUT_PER_CELL,
-            resources={"metadata": {"path": str(notebook_env / "notebooks")}},
-        )
+        copy = notebook_env / "notebooks" / path.name
+        nb = jupytext.read(copy)
+        client = notebook_client(nb, copy, sockets)
         t0 = time.perf_counter()
         try:
             await client.async_execute()  # raises CellExecutionError at the first failing cell
@@ -118,14 +131,13 @@ def test_notebook_executes(path, executed):
 
 
 @pytest.mark.slow
-def test_convergence_notebook_on_a_users_scene(notebook_env, monkeypatch):
+def test_convergence_notebook_on_a_users_scene(notebook_env, monkeypatch, tmp_path):
     """Notebook 02 on the user's scene ``mine`` (other meshes, norms L2 and H1 only): no published
     value, no paper row, an expected order for every norm, no Figure 3 (it has no L4/W14)."""
     monkeypatch.setenv(explore.SCENE_ENV, "mine")
     path = notebook_env / "notebooks" / "02_convergence.py"
     nb = jupytext.read(path)
-    NotebookClient(nb, kernel_name=KERNEL, timeout=TIMEOUT_PER_CELL,
-                   resources={"metadata": {"path": str(path.parent)}}).execute()
+    notebook_client(nb, path, tmp_path).execute()
     outputs = [o for cell in nb.cells if cell.cell_type == "code" for o in cell.get("outputs", [])]
     assert not [o for o in outputs if o.get("output_type") == "error"]
     text = "".join(o.get("text", "") for o in outputs if o.get("output_type") == "stream")
