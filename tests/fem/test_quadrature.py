@@ -64,3 +64,10 @@ def test_gauss_legendre_01(n):
     assert np.all((x > 0) & (x < 1)) and w.sum() == pytest.approx(1.0, rel=1e-14)
     for k in range(2 * n):
         assert w @ x**k == pytest.approx(1.0 / (k + 1), rel=1e-13)
+
+
+def test_rules_are_computed_once_and_read_only():
+    assert stroud_conical(5) is stroud_conical(5) and gauss_legendre_01(6) is gauss_legendre_01(6)
+    for array in (*stroud_conical(5), *gauss_legendre_01(6)):
+        with pytest.raises(ValueError):
+            array[0] = 0.0

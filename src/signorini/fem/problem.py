@@ -20,13 +20,15 @@ parameters as fields (checked in ``__post_init__``: ``ProblemParameterError``) a
 
 from __future__ import annotations
 
+import contextlib
+import contextvars
 from dataclasses import asdict, dataclass, fields, replace
 from typing import TYPE_CHECKING, ClassVar, Protocol
 
 import numpy as np
 
 if TYPE_CHECKING:
-    from collections.abc import Mapping
+    from collections.abc import Iterator, Mapping
 
     from signorini.fem.derivatives import DerivativeBounds
 
@@ -38,6 +40,24 @@ class ProblemParameterError(ValueError):
     def __init__(self, message: str, parameter: str | None = None):
         super().__init__(message)
         self.parameter = parameter
+
+
+# Meshes from this many triangles evaluate the manufactured u and ∇u by the compiled point
+# kernels (``fem.point_kernels``: the same bits); below, numba's import and loading cost more than
+# they save (docs/evidence/design-measurements.md#compiled-point-kernels).
+COMPILED_MIN_ELEMENTS = 1 << 20
+_COMPILED = contextvars.ContextVar("compiled_points", default=False)
+
+
+@contextlib.contextmanager
+def compiled_points(enabled: bool = True) -> Iterator[None]:
+    """Within the block, ``Problem.u`` and ``Problem.u_and_grad_u`` evaluate by the compiled point
+    kernels if ``enabled`` (bit for bit the numpy evaluation, in one pass over the points)."""
+    token = _COMPILED.set(enabled)
+    try:
+        yield
+    finally:
+        _COMPILED.reset(token)
 
 
 class ExactProblem(Protocol):
@@ -231,6 +251,8 @@ class Problem(ProblemBase):
         give zeros of either sign)."""
         if self.A == 0.0:  # u ≡ 0 (the norms of a P1 function, e.g. an algebraic error): nothing to evaluate
             return np.zeros(np.shape(x)[1:]), np.zeros(np.shape(x))
+        if _COMPILED.get():
+            return self._compiled(x, gradient=True)
         where, dx, dy, r, re, im, ut = self._local(x)
         shape = np.shape(x)[1:]
         psi, dpr, _ = self._cutoff(r)
@@ -342,8 +364,29 @@ class Problem(ProblemBase):
         """u = A ψ(r) ũ(r, θ), ũ = -r^{3/2} sin(3θ/2) (+0.0 everywhere for A = 0)."""
         if self.A == 0.0:
             return np.zeros(np.shape(x)[1:])
+        if _COMPILED.get():
+            return self._compiled(x, gradient=False)
         where, _, _, r, _, _, ut = self._local(x)
         return self._placed(where, self.A * self.psi(r) * ut, np.shape(x)[1:])
+
+    def _point_parameters(self) -> tuple[float, float, float]:
+        """(x0, R, A) as floats: one compiled specialisation of the kernels."""
+        return float(self.x0), float(self.R), float(self.A)
+
+    def _compiled(self, x: np.ndarray, gradient: bool):
+        """``u(x)``, or ``(u(x), ∇u(x))`` if ``gradient``, by the compiled point kernels."""
+        from signorini.fem import point_kernels  # numba: only where the kernels pay (``compiled_points``)
+
+        x = np.asarray(x, dtype=float)
+        shape = x.shape[1:]
+        px, py = np.ascontiguousarray(x[0]).ravel(), np.ascontiguousarray(x[1]).ravel()
+        u = np.empty(px.size)
+        if not gradient:
+            point_kernels.manufactured_u(px, py, *self._point_parameters(), u)
+            return u.reshape(shape)
+        grad = np.empty((2, px.size))
+        point_kernels.manufactured_u_and_grad(px, py, *self._point_parameters(), u, grad[0], grad[1])
+        return u.reshape(shape), grad.reshape((2, *shape))
 
     def grad_u(self, x: np.ndarray) -> np.ndarray:
         """∇u = A ((ψ'/r) ũ (dx, dy) + ψ ∇ũ), stacked as shape (2, ...)."""

@@ -10,6 +10,8 @@ of a Friedrichs–Keller triangle, in counter-clockwise order after the right an
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 TRIANGLE_RULES = ("dunavant8", "stroud4_right", "stroud4_acute1", "stroud4_acute2")
@@ -24,8 +26,16 @@ def dunavant8() -> tuple[np.ndarray, np.ndarray]:
     return X, W
 
 
-def stroud_conical(n: int = 4) -> tuple[np.ndarray, np.ndarray]:
-    """Barycentric-style data of the conical product rule: (s, t, w) on the unit square.
+def _read_only(*arrays: np.ndarray) -> tuple[np.ndarray, ...]:
+    for a in arrays:
+        a.flags.writeable = False
+    return arrays
+
+
+@functools.cache  # the true norms ask for a rule once per chunk of triangles
+def stroud_conical(n: int = 4) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Barycentric-style data of the conical product rule: (s, t, w) on the unit square, read-only
+    (computed once per process).
 
     A point (s, t) maps to ``v1 + s (v2 - v1) + s t (v3 - v2)``; ``s`` carries the
     Jacobian, hence Gauss–Jacobi with weight ``s`` on [0, 1].  Weights sum to 1
@@ -39,12 +49,15 @@ def stroud_conical(n: int = 4) -> tuple[np.ndarray, np.ndarray]:
     t, wt = (xl + 1.0) / 2.0, wl / 2.0
     S, T = np.meshgrid(s, t, indexing="ij")
     Wq = np.outer(ws, wt)
-    return S.ravel(), T.ravel(), 2.0 * Wq.ravel()  # weights sum to 1 (the area factor is applied per triangle)
+    # weights sum to 1 (the area factor is applied per triangle)
+    return _read_only(S.ravel().copy(), T.ravel().copy(), 2.0 * Wq.ravel())
 
 
+@functools.cache
 def gauss_legendre_01(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """n-point Gauss–Legendre rule on [0, 1] (the boundary line rule)."""
+    """n-point Gauss–Legendre rule on [0, 1] (the boundary line rule), read-only (computed once per
+    process)."""
     from scipy.special import roots_legendre
 
     x, w = roots_legendre(n)
-    return (x + 1.0) / 2.0, w / 2.0
+    return _read_only((x + 1.0) / 2.0, w / 2.0)

@@ -376,9 +376,9 @@ def _integrals(problem, mesh, u_h, integrand, gradient: bool, levels, elements: 
             if affine.any():
                 out[:, chunk[affine]] = exact(problem, aff.take(affine))
         plain = ~(is_near | affine)
+        plain_at, plain_aff, plain_v = chunk[plain], aff.take(plain), v[:, :, plain]
         for i, k in enumerate(levels):
-            n = INTEGRAL_LEVELS[k]
-            out[i, chunk[plain]] = _rule_integrals(problem, aff.take(plain), integrand, gradient, n, v[:, :, plain])
+            out[i, plain_at] = _rule_integrals(problem, plain_aff, integrand, gradient, INTEGRAL_LEVELS[k], plain_v)
             if is_near.any():
                 out[i, chunk[is_near]] = near_values[i][np.searchsorted(near.elements, el[is_near])]
     return out
