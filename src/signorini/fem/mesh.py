@@ -112,8 +112,11 @@ def fk_boundary_nodes(N: int) -> np.ndarray:
 def triangles_meeting_disc(p: np.ndarray, t: np.ndarray, support: tuple[np.ndarray, float]) -> np.ndarray:
     """Which triangles ``t`` may have a point in the open disc ``support`` (centre, radius): those
     whose bounding box comes nearer to the centre than the radius (with a margin of round-off).
-    A point of the triangle lies in its box, so a triangle left out has none in the disc."""
+    A point of the triangle lies in its box, so a triangle left out has none in the disc; the
+    empty disc (radius 0: a vanishing ``u``) meets none."""
     centre, radius = support
+    if radius <= 0.0:
+        return np.zeros(t.shape[1], dtype=bool)
     gaps = []
     for k in range(2):  # the distance from the centre to the box, per coordinate
         a, b, c = p[k][t[0]], p[k][t[1]], p[k][t[2]]

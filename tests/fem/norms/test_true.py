@@ -596,8 +596,8 @@ def _uniform(problem, mesh, u_h, name: str, level: int, conv: Conventions) -> fl
 
     norm = define(name, conv)
     plain, gradient = tn._integrand(norm)
-    scale = tn._error_scale(problem, mesh, u_h, gradient)
-    near = tn._NearField.of(problem, mesh, u_h)
+    scale, near_mask, _ = tn._survey(problem, mesh, u_h, gradient)
+    near = tn._NearField.of(problem, mesh, u_h, near_mask)
 
     def integrand(e, de):
         return plain(e / scale, None if de is None else de / scale)

@@ -144,17 +144,6 @@ def _chunks(n: int):
         yield np.arange(start, min(n, start + CHUNK))
 
 
-def _error_scale(problem, mesh: MeshTri, u_h: np.ndarray, gradient: bool) -> float:
-    """A power of two near the largest |e| (and |∇e|) at the element centroids: the integrands'
-    powers |e / scale|^p then neither overflow nor underflow (``norms.power_scale``)."""
-    scales = []
-    for el in _chunks(mesh.t.shape[1]):
-        aff = _Affine.of(mesh, u_h, el)
-        e, de = aff.error(problem, aff.v.mean(axis=1)[:, :, None], gradient)
-        scales.append(power_scale(e if de is None else np.concatenate([e.ravel(), de.ravel()])))
-    return max(scales, default=1.0)
-
-
 def _squared(name: str, e: np.ndarray, de: np.ndarray | None) -> np.ndarray:
     """The squared magnitude of the part ``name``: ``x · x``, and ``∂₁e² + ∂₂e²`` for ``|∇e|``."""
     if name == "grad":
@@ -318,16 +307,12 @@ class _NearField:
     fan_p: np.ndarray
 
     @classmethod
-    def of(cls, problem, mesh: MeshTri, u_h: np.ndarray) -> _NearField | None:
+    def of(cls, problem, mesh: MeshTri, u_h: np.ndarray, mask: np.ndarray) -> _NearField | None:
+        """The near field of the elements ``mask`` marks (``_survey``); None without a singular point."""
         points = singular_points(problem)
-        if points.shape[1] > 1:  # the grading is toward one point
-            raise ValueError("the true norms handle at most one singular point")
         if not points.shape[1]:
             return None
-        apex, mask = points[:, 0], np.zeros(mesh.t.shape[1], dtype=bool)
-        for el in _chunks(mesh.t.shape[1]):
-            verts = mesh.p[:, mesh.t[:, el]]
-            mask[el] = _radii(problem, verts)[0] < FAR * _diameters(verts)  # exact there: FAR + 1 < EXACT_DISTANCE
+        apex = points[:, 0]
         elements = np.flatnonzero(mask)
         pieces = _graded(mesh.p[:, mesh.t[:, elements]], apex)
         return cls(apex, elements, mask, _Affine.of(mesh, u_h, elements), *pieces)
@@ -357,24 +342,47 @@ def _radii(problem, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return r_lo, vertex.max(axis=0)
 
 
+def _survey(problem, mesh: MeshTri, u_h: np.ndarray, gradient: bool) -> tuple[float, np.ndarray, np.ndarray | None]:
+    """One pass over the elements: a power of two near the largest |e| (and |∇e|) at the element
+    centroids (the integrands' powers |e / scale|^p then neither overflow nor underflow:
+    ``norms.power_scale``); per element whether it lies within ``FAR`` diameters of the singular
+    point (the near field; its distance exact there: ``FAR + 1 < EXACT_DISTANCE``); and, where the
+    problem bounds its derivatives, whether u is affine on it (``hessian_bound`` zero; else None)."""
+    if singular_points(problem).shape[1] > 1:  # the grading is toward one point
+        raise ValueError("the true norms handle at most one singular point")
+    bounds, n_el, scales = derivative_bounds(problem), mesh.t.shape[1], []
+    near, affine = np.zeros(n_el, dtype=bool), None if bounds is None else np.zeros(n_el, dtype=bool)
+    for el in _chunks(n_el):
+        aff = _Affine.of(mesh, u_h, el)
+        e, de = aff.error(problem, aff.v.mean(axis=1)[:, :, None], gradient)
+        scales.append(power_scale(e if de is None else np.concatenate([e.ravel(), de.ravel()])))
+        r_lo, r_hi = _radii(problem, aff.v)
+        near[el] = r_lo < FAR * _diameters(aff.v)
+        if affine is not None:
+            affine[el] = np.asarray(bounds.hessian_bound(r_lo, r_hi)) == 0.0
+    return max(scales, default=1.0), near, affine
+
+
 def _integrals(problem, mesh, u_h, integrand, gradient: bool, levels, elements: np.ndarray, near, exact=None):
     """∫ over each of ``elements`` (k,) at each of ``levels`` (R, k): the conical rule of
     ``INTEGRAL_LEVELS``, or the graded rule of ``near`` (``NEAR_LEVELS``) for the elements near the
-    singular point, or (R equal rows) the closed form ``exact`` (``_affine_rule``) on the elements
-    where u is affine (``hessian_bound`` zero)."""
+    singular point, or (R equal rows) the closed form of ``exact`` = (``_affine_rule``, the mask of
+    ``_survey``) on the elements where u is affine."""
     out = np.empty((len(levels), elements.size))
     near_values = None
     if near is not None and near.mask[elements].any():
         near_values = [near.integrals(problem, integrand, gradient, NEAR_LEVELS[k]) for k in levels]
     for chunk in _chunks(elements.size):
         el = elements[chunk]
-        v, aff = mesh.p[:, mesh.t[:, el]], _Affine.of(mesh, u_h, el)
+        aff = _Affine.of(mesh, u_h, el)
+        v = aff.v
         is_near = np.zeros(el.size, dtype=bool) if near is None else near.mask[el]
         affine = np.zeros(el.size, dtype=bool)
         if exact is not None:
-            affine = ~is_near & (np.asarray(derivative_bounds(problem).hessian_bound(*_radii(problem, v))) == 0.0)
+            rule, affine_mask = exact
+            affine = ~is_near & affine_mask[el]
             if affine.any():
-                out[:, chunk[affine]] = exact(problem, aff.take(affine))
+                out[:, chunk[affine]] = rule(problem, aff.take(affine))
         plain = ~(is_near | affine)
         plain_at, plain_aff, plain_v = chunk[plain], aff.take(plain), v[:, :, plain]
         for i, k in enumerate(levels):
@@ -420,13 +428,14 @@ def _integral_norm(problem, mesh, u_h, norm: NormDefinition, rtol: float) -> Tru
     elements of the largest differences to their next rule until ``E`` is within the tolerance of
     the integral that makes the norm's error at most ``rtol`` (module docstring)."""
     plain, gradient = _integrand(norm)
-    scale = _error_scale(problem, mesh, u_h, gradient)  # a power of two: e / scale is exact
+    scale, near_mask, affine_mask = _survey(problem, mesh, u_h, gradient)  # e / scale is exact
 
     def integrand(e: np.ndarray, de: np.ndarray | None) -> np.ndarray:  # (norm / scale)^p, in range
         return plain(e / scale, None if de is None else de / scale)
 
-    near, n_el, p = _NearField.of(problem, mesh, u_h), mesh.t.shape[1], norm.p
-    exact = None if derivative_bounds(problem) is None else _affine_rule(norm, plain, scale)
+    near, n_el, p = _NearField.of(problem, mesh, u_h, near_mask), mesh.t.shape[1], norm.p
+    rule = None if affine_mask is None else _affine_rule(norm, plain, scale)
+    exact = None if rule is None else (rule, affine_mask)
     value, diff, lower = np.empty(n_el), np.empty(n_el), 0.0
     for block in range(0, n_el, 64 * CHUNK):  # blocks bound the memory of the two rules' values
         el = np.arange(block, min(n_el, block + 64 * CHUNK))
