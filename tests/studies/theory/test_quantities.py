@@ -150,3 +150,22 @@ def test_contact_set_of_the_default_problem():
     assert c["n_contact_nodes"] == np.count_nonzero(u_h[disc.boundary] == 0.0)
     assert 0.0 < c["free_point_offset"] <= 1.0 / 41  # first contact node right of x0
     assert c["hausdorff_discrete_to_exact"] < 1e-3  # discrete contact ⊂ exact contact set
+
+
+def test_theory_quantities_take_the_compiled_points_from_the_threshold_with_the_same_values(monkeypatch):
+    from signorini.fem import point_kernels
+    from signorini.studies.theory import quantities
+
+    problem = Problem()
+    disc = build(problem, 40)
+    u_h = solve_discrete(disc, "active_set").u
+    numpy_values = quantities.theory_quantities(problem, disc.mesh, u_h, disc.A)
+    calls = []
+    real = point_kernels.manufactured_u_and_grad
+    monkeypatch.setattr(point_kernels, "manufactured_u_and_grad", lambda *a: calls.append(1) or real(*a))
+    monkeypatch.setattr(quantities, "COMPILED_MIN_ELEMENTS", disc.mesh.t.shape[1])
+    compiled_values = quantities.theory_quantities(problem, disc.mesh, u_h, disc.A)
+    assert calls
+    for values in (numpy_values, compiled_values):  # the Ritz solve's own timings apart
+        values["ritz"] = {k: v for k, v in values["ritz"].items() if not k.endswith("_s")}
+    assert repr(compiled_values) == repr(numpy_values)
