@@ -63,11 +63,11 @@ def test_norms_take_the_kernels_from_the_threshold_with_the_same_values(monkeypa
     calls = []
     real = point_kernels.manufactured_u_and_grad
     monkeypatch.setattr(point_kernels, "manufactured_u_and_grad", lambda *a: calls.append(1) or real(*a))
-    monkeypatch.setattr(evaluate, "COMPILED_MIN_ELEMENTS", mesh.t.shape[1])
+    monkeypatch.setattr(problem, "COMPILED_MIN_ELEMENTS", mesh.t.shape[1])
     compiled_values = evaluate.evaluate_named_norms(P, mesh, u_h, names, details=True)
     assert calls and problem._COMPILED.get() is False
     assert repr(compiled_values) == repr(numpy_values)  # every value and level, bit for bit
-    monkeypatch.setattr(evaluate, "COMPILED_MIN_ELEMENTS", mesh.t.shape[1] + 1)
+    monkeypatch.setattr(problem, "COMPILED_MIN_ELEMENTS", mesh.t.shape[1] + 1)
     calls.clear()
     evaluate.evaluate_named_norms(P, mesh, u_h, ["W14"])
     assert not calls

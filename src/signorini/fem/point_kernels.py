@@ -4,8 +4,9 @@ temporary array each.
 
 Importing numba and loading these kernels costs a process more than they save below about a
 million elements (docs/evidence/design-measurements.md#compiled-point-kernels): ``Problem`` calls
-them only inside ``fem.problem.compiled_points`` (the norm evaluators enter it for meshes of at
-least ``fem.problem.COMPILED_MIN_ELEMENTS`` triangles) and otherwise evaluates with numpy.  Each
+them only inside ``fem.problem.compiled_points`` (the norm evaluators and the theory quantities
+enter it through ``compiled_points_for`` for meshes of at least
+``fem.problem.COMPILED_MIN_ELEMENTS`` triangles) and otherwise evaluates with numpy.  Each
 kernel performs ``Problem._local`` and ``Problem._cutoff``'s operations in their order (no
 contraction into fused multiply–adds: numba leaves it off without ``fastmath``), so both paths
 give the same bits; the tests compare them.  Compiled once per machine and cached beside this

@@ -60,6 +60,12 @@ def compiled_points(enabled: bool = True) -> Iterator[None]:
         _COMPILED.reset(token)
 
 
+def compiled_points_for(triangles: int) -> contextlib.AbstractContextManager[None]:
+    """``compiled_points`` for work over a mesh of ``triangles`` triangles: enabled from
+    ``COMPILED_MIN_ELEMENTS`` on (the one place that decides)."""
+    return compiled_points(triangles >= COMPILED_MIN_ELEMENTS)
+
+
 class ExactProblem(Protocol):
     """What the assembly, the norms and the stages use of a problem: the reaction coefficient ``c``,
     ``u``, ``∇u`` and ``f`` at points ``x`` of shape (2, ...), and its parameters (``as_dict``); and

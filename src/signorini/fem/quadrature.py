@@ -27,6 +27,7 @@ def dunavant8() -> tuple[np.ndarray, np.ndarray]:
 
 
 def _read_only(*arrays: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The arrays, marked read-only (a cached rule is shared by every caller)."""
     for a in arrays:
         a.flags.writeable = False
     return arrays
@@ -50,7 +51,7 @@ def stroud_conical(n: int = 4) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     S, T = np.meshgrid(s, t, indexing="ij")
     Wq = np.outer(ws, wt)
     # weights sum to 1 (the area factor is applied per triangle)
-    return _read_only(S.ravel().copy(), T.ravel().copy(), 2.0 * Wq.ravel())
+    return _read_only(S.ravel(), T.ravel(), 2.0 * Wq.ravel())
 
 
 @functools.cache

@@ -154,6 +154,7 @@ def test_contact_set_of_the_default_problem():
 
 def test_theory_quantities_take_the_compiled_points_from_the_threshold_with_the_same_values(monkeypatch):
     from signorini.fem import point_kernels
+    from signorini.fem import problem as problems
     from signorini.studies.theory import quantities
 
     problem = Problem()
@@ -163,7 +164,7 @@ def test_theory_quantities_take_the_compiled_points_from_the_threshold_with_the_
     calls = []
     real = point_kernels.manufactured_u_and_grad
     monkeypatch.setattr(point_kernels, "manufactured_u_and_grad", lambda *a: calls.append(1) or real(*a))
-    monkeypatch.setattr(quantities, "COMPILED_MIN_ELEMENTS", disc.mesh.t.shape[1])
+    monkeypatch.setattr(problems, "COMPILED_MIN_ELEMENTS", disc.mesh.t.shape[1])
     compiled_values = quantities.theory_quantities(problem, disc.mesh, u_h, disc.A)
     assert calls
     for values in (numpy_values, compiled_values):  # the Ritz solve's own timings apart

@@ -16,7 +16,7 @@ from signorini.fem.norms.conventional import evaluate_norms
 from signorini.fem.norms.conventions import Conventions
 from signorini.fem.norms.names import NormName, norm_name
 from signorini.fem.norms.true import TrueNorm, true_norm
-from signorini.fem.problem import COMPILED_MIN_ELEMENTS, compiled_points
+from signorini.fem.problem import compiled_points_for
 
 if TYPE_CHECKING:
     from skfem import MeshTri
@@ -35,11 +35,11 @@ def evaluate_named_norms(
     them; each value the one the name alone gives, bit for bit), and every ``<name>_true`` by
     ``fem.norms.true.true_norm``.  The values as floats; with ``details``, a ``_true`` name maps to
     its ``TrueNorm`` (value, error estimate, levels).  Unknown names raise ``UnknownNormError``
-    before any work.  On meshes of at least ``COMPILED_MIN_ELEMENTS`` triangles ``u`` and ``∇u``
-    come from the compiled point kernels (``fem.problem.compiled_points``: the same bits)."""
+    before any work.  On large meshes ``u`` and ``∇u`` come from the compiled point kernels
+    (``fem.problem.compiled_points_for``: the same bits)."""
     specs = [norm_name(name) for name in names]
     plain = [spec for spec in specs if not spec.true]
-    with compiled_points(mesh.t.shape[1] >= COMPILED_MIN_ELEMENTS):
+    with compiled_points_for(mesh.t.shape[1]):
         out: dict = dict(evaluate_norms(problem, mesh, u_h, plain, conventions)) if plain else {}
         for spec in specs:
             if spec.true:

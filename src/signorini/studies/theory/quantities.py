@@ -36,7 +36,7 @@ from skfem.refdom import RefTri
 from signorini.fem.assembly import CHUNK_ELEMENTS, INTORDER, accumulate, p1_values, quadrature_chunks, system_matrix
 from signorini.fem.derivatives import u_and_grad_u
 from signorini.fem.mesh import boundary_nodes
-from signorini.fem.problem import COMPILED_MIN_ELEMENTS, Problem, compiled_points
+from signorini.fem.problem import Problem, compiled_points_for
 
 if TYPE_CHECKING:
     from signorini.studies.scene.store import SceneMesh
@@ -263,10 +263,10 @@ def contact_set(problem: Problem, mesh: MeshTri, u_h: np.ndarray, samples_per_un
 def theory_quantities(problem: Problem, mesh: MeshTri, u_h: np.ndarray, A: sp.spmatrix | None = None) -> dict:
     """Supercloseness, the discrete H^{1/2}(∂Ω) norm of the error and the contact-set metrics;
     ``A = K + c M`` of the discrete problem if at hand (else assembled), and under ``ritz`` how
-    ``R_h u`` was solved (``ritz_solve``).  On meshes of at least ``COMPILED_MIN_ELEMENTS`` triangles
-    ``u`` and ``∇u`` come from the compiled point kernels (``fem.problem.compiled_points``: the same bits)."""
+    ``R_h u`` was solved (``ritz_solve``).  On large meshes ``u`` and ``∇u`` come from the compiled
+    point kernels (``fem.problem.compiled_points_for``: the same bits)."""
     ritz: dict = {}
-    with compiled_points(mesh.t.shape[1] >= COMPILED_MIN_ELEMENTS):
+    with compiled_points_for(mesh.t.shape[1]):
         return {
             "supercloseness_H1": supercloseness(problem, mesh, u_h, A=A, info=ritz),
             "H12_discrete": boundary_h12_norm(problem, mesh, u_h),
