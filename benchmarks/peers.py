@@ -46,8 +46,8 @@ from signorini.fem.discrete import build  # noqa: E402
 from signorini.fem.problem import Problem  # noqa: E402
 from signorini.pipeline.artifacts import save_json  # noqa: E402
 from signorini.pipeline.paths import PEER_DRIVER  # noqa: E402
-from signorini.studies.work_precision.peers import PeerRoute, probe  # noqa: E402
-from signorini.studies.work_precision.study import PEER_PYTHON, WARM_SUFFIX, study_configs  # noqa: E402
+from signorini.peers import PEER_PYTHON, PeerRoute, probe  # noqa: E402
+from signorini.studies.work_precision.study import WARM_SUFFIX, study_configs  # noqa: E402
 from signorini.timing import Protocol, Timer  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]

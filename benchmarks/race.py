@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from signorini import intervals
 from signorini.studies.work_precision.measure import classify_failure, timed_call, timed_start, with_start
 from signorini.studies.work_precision.study import SolverConfig, accuracy_status
 from signorini.timing import ReferenceKernel, Task, Timer, round_robin, task_summary
@@ -68,10 +69,11 @@ def race(
     time_limit_s: float | None = None,
     reference: str = REFERENCE,
 ) -> dict:
-    """Time ``configs`` on ``disc`` round-robin (peers through ``route``, a ``peers.PeerRoute``)
+    """Time ``configs`` on ``disc`` round-robin (peers through ``route``, a ``signorini.peers.PeerRoute``)
     at tolerance ``tol``; per configuration the protocol's summary, status, agreement with the
     reference configuration's solution (max norm relative to ``‖u‖∞``) and the time ratios to it
-    (``ratio_ref``: reference units, ``ratio_cpu``, ``ratio_wall``)."""
+    (``ratio_ref``: reference units, ``ratio_cpu``, ``ratio_wall``; ``ratio_cpu_interval``: the CPU
+    ratio's bootstrap interval and verdict, ``signorini.intervals``)."""
     kernel = ReferenceKernel(disc.A)
     start, start_timing = None, {}
     if any(_from_cascade(c) for c in configs.values()):
@@ -111,7 +113,15 @@ def _compare(out: dict, reference: str) -> None:
         u = rec.pop("_u")
         scale = float(np.abs(ref_u).max()) if ref_u is not None else math.nan
         rec["agreement"] = float(np.abs(u - ref_u).max()) / scale if u is not None and ref_u is not None else math.nan
-    for rec in out.values():
+    for name, rec in out.items():
         for key, field in (("ratio_ref", "time_ref"), ("ratio_cpu", "time_s"), ("ratio_wall", "wall_s")):
             ok = ref is not None and field in rec and field in ref and ref[field] > 0
             rec[key] = rec[field] / ref[field] if ok else math.nan
+        if math.isfinite(rec["ratio_cpu"]):
+            ratio = intervals.ratio(_time(name, rec), _time(reference, ref))
+            rec["ratio_cpu_interval"] = ratio.summary() | {"verdict": intervals.verdict(ratio)}
+
+
+def _time(name: str, rec: Mapping) -> intervals.Estimate:
+    """A configuration's CPU time with its bootstrap (its samples, shifted by a start's cost)."""
+    return intervals.median(intervals.samples(rec["times"]), (name,), rec["time_s"])

@@ -12,8 +12,10 @@ this tree in ``--workdir``; the baseline's jobs import ``signorini`` from a git 
 ``--baseline`` (in a temporary directory, removed at the end).  The two trees run alternately,
 ``--repeats`` times each (baseline, tree, baseline, tree, ...), so a drift of the machine's speed
 hits both alike.  Per stage the JSON holds each tree's CPU seconds (every run, the median) and peak
-resident memory, ``ratio_cpu``: the median of the pairwise ratios tree / baseline, and the 1-minute
-load average before and after every run (``loaded_runs``: the runs under a load above the cores).
+resident memory, ``ratio_cpu``: the median of the pairwise ratios tree / baseline,
+``ratio_cpu_interval``: the ratio of the two trees' median CPU times with its bootstrap interval and
+verdict (``signorini.intervals``: a tie when the interval contains 1), and the 1-minute load average
+before and after every run (``loaded_runs``: the runs under a load above the cores).
 """
 
 from __future__ import annotations
@@ -51,7 +53,9 @@ def run_job(stage: str, N: int, workdir: Path, src: Path, timeout_s: float) -> d
 
 def summarise(runs: dict[str, list[dict]]) -> dict:
     """Per tree: every run's CPU seconds, their median and the peak RSS; the median of the pairwise
-    CPU ratios tree / baseline."""
+    CPU ratios tree / baseline, and the ratio of the medians with its interval and verdict."""
+    from signorini import intervals
+
     out: dict = {}
     for tree, records in runs.items():
         cpu = [r["cpu_s"] for r in records if "cpu_s" in r]
@@ -67,6 +71,10 @@ def summarise(runs: dict[str, list[dict]]) -> dict:
         if "cpu_s" in b and "cpu_s" in t and b["cpu_s"] > 0
     ]
     out["ratio_cpu"] = statistics.median(pairs) if pairs else None
+    if out["tree"]["cpu_s"] and out["baseline"]["cpu_s"]:
+        tree, base = (intervals.median(out[k]["cpu_s"], (k,)) for k in ("tree", "baseline"))
+        ratio = intervals.ratio(tree, base)
+        out["ratio_cpu_interval"] = ratio.summary() | {"verdict": intervals.verdict(ratio)}
     return out
 
 

@@ -113,7 +113,7 @@ def one_run(Ns: list[int], chosen: dict, tol: float, timer, python: str, probe: 
 
     from signorini.fem.discrete import build
     from signorini.fem.problem import Problem
-    from signorini.studies.work_precision.peers import PeerRoute
+    from signorini.peers import PeerRoute
 
     out = {}
     for N in Ns:
@@ -170,8 +170,7 @@ def time_change(quiet: dict, loaded: dict, key: str) -> float:
 
 def main(argv: list[str] | None = None) -> int:
     from signorini.pipeline.artifacts import save_json
-    from signorini.studies.work_precision.peers import probe
-    from signorini.studies.work_precision.study import PEER_PYTHON
+    from signorini.peers import PEER_PYTHON, probe
     from signorini.timing import Protocol, Timer
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])

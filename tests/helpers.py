@@ -8,6 +8,7 @@ the real tree and its results/ cache are never touched.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import re
 import shutil
@@ -19,13 +20,13 @@ import meshio
 import numpy as np
 from snakemake_server import Server
 
+from signorini.peers import PEER_PYTHON
 from signorini.pipeline.config import load_config
 from signorini.pipeline.paths import PEER_DRIVER
 from signorini.published import PAPER_NORMS
 from signorini.studies.scene.discretise import discretise_stage
 from signorini.studies.scene.solve import solve_stage
 from signorini.studies.scene.store import SceneMesh
-from signorini.studies.work_precision.study import PEER_PYTHON
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
@@ -39,6 +40,14 @@ NORMS = list(PAPER_NORMS)
 SMOKE_N = [11, 21, 41]
 # an errors.csv of three meshes and one norm
 ERRORS = "N,h,L4\n11,0.0909,0.04\n21,0.0476,0.012\n41,0.0244,0.0035\n"
+
+
+def benchmark(name: str):
+    """The script ``benchmarks/<name>.py`` as a module."""
+    spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def copy_repo(dest: Path) -> Path:
@@ -290,3 +299,38 @@ def contact_table(meshes, right_end: float, single_on=()):
     table = pd.DataFrame(rows)
     table["N"] = table["N"].astype("Int64")
     return table
+
+
+def fake_interpreter(tmp: Path, kind: str) -> str:
+    """A peer interpreter that cannot run the peers: missing, ours (numpy, no petsc4py), one
+    without numpy (site-packages off), one whose petsc4py fails to import, one that crashes, not
+    executable, one that prints something else than the probe's JSON."""
+    if kind == "missing":
+        return "/nonexistent/python3"
+    if kind == "project":
+        return sys.executable
+    script = tmp / f"python-{kind}"
+    body = {
+        "no_numpy": f'exec "{sys.executable}" -S -I "$@"',
+        "broken_petsc4py": f'PYTHONPATH="{tmp / "fake"}" exec "{sys.executable}" "$@"',
+        "crash": "echo 'Segmentation fault' >&2; exit 139",
+        "not_executable": "",
+        "garbage": "echo 'Welcome to Python'",
+    }[kind]
+    fake = tmp / "fake/petsc4py"
+    fake.mkdir(parents=True)
+    (fake / "__init__.py").write_text("raise RuntimeError('petsc4py built against another PETSc')\n")
+    script.write_text(f"#!/bin/sh\n{body}\n")
+    script.chmod(0o644 if kind == "not_executable" else 0o755)
+    return str(script)
+
+
+FAKE_INTERPRETERS = {  # what the probe says of each fake_interpreter
+    "missing": "not found",
+    "project": "petsc4py not importable",
+    "no_numpy": "numpy not importable",
+    "broken_petsc4py": "RuntimeError: petsc4py built against another PETSc",
+    "crash": "Segmentation fault",
+    "not_executable": "PermissionError",
+    "garbage": "not the probe's JSON answer: Welcome to Python",
+}

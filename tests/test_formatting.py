@@ -6,7 +6,17 @@ import math
 
 import pytest
 
-from signorini.formatting import certified_decimals, certified_digits, round_sig, sci_md, sig_csv
+from signorini.formatting import (
+    certified_decimals,
+    certified_digits,
+    fmt_factor,
+    fmt_fit,
+    fmt_ratio,
+    fmt_timed,
+    round_sig,
+    sci_md,
+    sig_csv,
+)
 
 
 @pytest.mark.parametrize(
@@ -33,3 +43,16 @@ def test_round_sig_is_what_every_format_prints():
     assert round_sig(x, 5) == 2.3949e-05 and sig_csv(round_sig(x, 5), 5) == "2.3949e-05"
     assert sci_md(round_sig(x, 3), 2) == "2.39·10⁻⁵"
     assert round_sig(9.99996, 5) == 10.0 and sci_md(10.0, 4) == "1.0000·10¹"
+
+
+def test_times_ratios_and_exponents_are_printed_with_their_intervals():
+    assert fmt_timed({"value": 1.58, "lo": 1.32, "hi": 1.82, "interval": True, "samples": 5}) == "1.6 s (1.3–1.8)"
+    assert fmt_timed({"value": 12.4, "lo": 0, "hi": 0, "interval": False, "samples": 1}) == "12.4 s (1 sample)"
+    assert fmt_ratio({"value": 0.9, "lo": 0.7, "hi": 1.4, "interval": True, "verdict": "tie"}) == "tie (×0.70–1.4)"
+    assert fmt_ratio({"value": 2.4, "lo": 2.2, "hi": 2.8, "interval": True, "verdict": "above"}) == "×2.4 (2.2–2.8)"
+    assert fmt_fit({"value": -0.95, "lo": -0.97, "hi": -0.93, "interval": True}) == "−0.95 (−0.97 to −0.93)"
+    assert fmt_fit({"value": 1.05, "lo": 1.01, "hi": 1.11, "interval": True}) == "1.05 (1.01–1.11)"
+    assert fmt_ratio({"value": 2.4, "lo": 0.0, "hi": 0.0, "interval": False, "verdict": "undetermined"}) == (
+        "×2.4 (undetermined: one sample each)"
+    )
+    assert fmt_factor(0.821) == "0.82" and fmt_factor(12.4) == "12" and fmt_timed({"value": float("nan")}) == "—"

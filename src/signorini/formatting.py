@@ -11,7 +11,7 @@ value (``round_sig``), so the outputs do not depend on the processor's round-off
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 _SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
 
@@ -99,6 +99,48 @@ def fmt_time(t: float) -> str:
 def fmt_rel(x: float) -> str:
     """A relative quantity with two significant digits (``1.2e-05``), ``0`` or ``—``."""
     return "—" if not math.isfinite(x) else ("0" if x == 0 else f"{x:.1e}")
+
+
+def fmt_timed(t: Mapping) -> str:
+    """A time with its interval (``intervals.Estimate.summary``, with its ``samples``):
+    ``1.6 s (1.3–1.8)``, ``12.4 s (1 sample)``, ``—``."""
+    if not math.isfinite(t["value"]):
+        return "—"
+    if t["interval"]:
+        lo, hi = (fmt_time(t[k]).removesuffix(" s") for k in ("lo", "hi"))
+        return f"{fmt_time(t['value'])} ({lo}–{hi})"
+    return f"{fmt_time(t['value'])} (1 sample)" if t.get("samples") == 1 else fmt_time(t["value"])
+
+
+def fmt_factor(x: float) -> str:
+    """A factor as the ratios print it: ``0.82``, ``1.3``, ``12``."""
+    return f"{x:.2f}" if x < 1.0 else (f"{x:.1f}" if x < 10.0 else f"{x:.0f}")
+
+
+def fmt_ratio(r: Mapping) -> str:
+    """A ratio with its interval and ``verdict`` (``intervals``): ``×2.0 (1.6–2.4)``, a tie
+    (``tie (×0.82–1.3)``) or without one."""
+    if not math.isfinite(r["value"]):
+        return "—"
+    if r["verdict"] == "tie":
+        return f"tie (×{fmt_factor(r['lo'])}–{fmt_factor(r['hi'])})"
+    if r["interval"]:
+        return f"×{fmt_factor(r['value'])} ({fmt_factor(r['lo'])}–{fmt_factor(r['hi'])})"
+    return f"×{fmt_factor(r['value'])} (undetermined: one sample each)"
+
+
+def _signed(x: float) -> str:
+    return f"{x:.2f}".replace("-", "−")
+
+
+def fmt_fit(p: Mapping) -> str:
+    """An exponent or slope with its interval: ``1.05 (1.01–1.11)``, ``−0.95 (−0.97 to −0.93)``."""
+    if not math.isfinite(p["value"]):
+        return "—"
+    if not p["interval"]:
+        return _signed(p["value"])
+    dash = " to " if min(p["lo"], p["hi"]) < 0 else "–"
+    return f"{_signed(p['value'])} ({_signed(p['lo'])}{dash}{_signed(p['hi'])})"
 
 
 def md_table(header: Sequence[str], rows: Sequence[Sequence[str]], align: str = "r") -> str:

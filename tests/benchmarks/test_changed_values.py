@@ -3,11 +3,11 @@
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-import changed_values  # noqa: E402
+from helpers import benchmark
+
+changed_values = benchmark("changed_values")
 
 
 def _artifact(path: Path, value: float, uncertainty: float | None = None) -> None:

@@ -4,23 +4,14 @@ the cascade is charged with its start, as the study's measurement charges it."""
 
 from __future__ import annotations
 
-import importlib.util
 import math
 
-from helpers import ROOT
+from helpers import benchmark
 
 from signorini.studies.work_precision.study import study_configs
 from signorini.timing import Protocol, Timer
 
 FAST = {"wait_s": 0.0, "retries": 0, "min_repeats": 1, "budget_s": 1.0}  # no waiting for a quiet machine
-
-
-def benchmark(name: str):
-    """The script ``benchmarks/<name>.py`` as a module."""
-    spec = importlib.util.spec_from_file_location(name, ROOT / "benchmarks" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 race = benchmark("race")
@@ -41,6 +32,10 @@ def test_exact_routes_agree_with_the_reference_and_a_failing_one_stops_its_task_
         assert runs[name]["status"] == "ok" and runs[name]["agreement"] <= 1e-12, (name, runs[name])
         assert runs[name]["time_s"] > 0 and runs[name]["iterations"] >= 1
     assert runs["active_set"]["agreement"] == 0.0 and runs["active_set"]["ratio_cpu"] == 1.0
+    interval = runs["cold"]["ratio_cpu_interval"]  # the ratio with its bootstrap interval and verdict
+    assert interval["value"] == runs["cold"]["ratio_cpu"] and interval["verdict"] in ("tie", "below", "above",
+                                                                                      "undetermined")
+    assert not interval["interval"] or interval["lo"] <= interval["value"] <= interval["hi"]
     assert runs["cold"]["start"] == "cold" and runs["active_set"]["start"] == "cascade"
     assert runs["truncated"]["status"] == "failed" and math.isnan(runs["truncated"]["agreement"])
     assert out["start"] == {}  # no peer started from the cascade: no coarse solve timed for one

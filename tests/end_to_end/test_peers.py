@@ -7,8 +7,8 @@ import pandas as pd
 from helpers import PEER_DRIVER_FILE as DRIVER
 from helpers import TEST_PEER_PYTHON, clone_built, planned, snakemake
 
+from signorini import peers
 from signorini.pipeline.paths import PEER_DRIVER
-from signorini.studies.work_precision import peers
 
 
 def test_peers_in_the_small_study(built_repo):

@@ -38,6 +38,7 @@ from signorini.pipeline.config import (
     check_norm_name,
     one_line_errors,
 )
+from signorini.peers import PEER_PYTHON
 from signorini.studies.stability import atlas as stab_atlas
 from signorini.studies.work_precision import study as wp_study
 

@@ -45,7 +45,7 @@ rule work_precision_measure:
             "growth_exponent", wp_study.GROWTH_EXPONENT
         ),
         disc_norm_jsons=wp_disc_norms,
-        peer_python=lambda wc: study_of(wc).get("peer_python", wp_study.PEER_PYTHON),
+        peer_python=lambda wc: study_of(wc).get("peer_python", PEER_PYTHON),
         timing=lambda wc: study_of(wc).get("timing", {}),
     script:
         "../scripts/work_precision_measure.py"

@@ -1,5 +1,5 @@
-"""PETSc's SNES VI and TAO solvers as peers of the work-precision study: the driver
-(``workflow/peers/petsc_peer.py``), the statuses the study gives its answers, the skip when
+"""PETSc's SNES VI and TAO solvers as peers of the work-precision study (``signorini.peers`` has its
+own tests in ``tests/test_peers.py``): the statuses the study gives their answers, the skip when
 petsc4py is missing, and (marker ``peers``) a smoke run of every configured peer at N = 21 and 41.
 
 The smoke tests need petsc4py under the peer interpreter (``/usr/bin/python3``; Debian:
@@ -9,7 +9,6 @@ The smoke tests need petsc4py under the peer interpreter (``/usr/bin/python3``; 
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import os
 import subprocess
@@ -18,10 +17,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import FAKE_INTERPRETERS, PROBLEM, ROOT, TEST_PEER_PYTHON, fake_interpreter
 from helpers import PEER_DRIVER_FILE as DRIVER
-from helpers import PROBLEM, ROOT, TEST_PEER_PYTHON
 
 from signorini.fem.discrete import DiscreteProblem
+from signorini.peers import PEER_SOLVERS, PeerRoute, probe
 from signorini.pipeline.config import load_config
 from signorini.studies.scene.discretise import discretise_stage
 from signorini.studies.scene.norm import norm_stage
@@ -36,17 +36,10 @@ REQUIRED = os.environ.get("SIGNORINI_REQUIRE_PEERS") == "1"
 FAST = {"wait_s": 0.0, "retries": 0, "min_repeats": 1, "budget_s": 1.0}  # no waiting for a quiet machine
 
 
-def _driver():
-    spec = importlib.util.spec_from_file_location("petsc_peer", DRIVER)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.fixture(scope="module")
 def petsc_probe() -> dict:
     """The driver's probe under the peer interpreter; skips (or fails in CI) without petsc4py."""
-    found = peers.probe(TEST_PEER_PYTHON, DRIVER)
+    found = probe(TEST_PEER_PYTHON, DRIVER)
     if not found.get("petsc4py"):
         if REQUIRED:
             pytest.fail(f"SIGNORINI_REQUIRE_PEERS=1 but {found.get('error')}")
@@ -67,24 +60,6 @@ def test_peer_configurations_are_recognised():
     assert not any(c.exact for c in configs.values())
     kinds = {str(c.options.get("snes_type", c.options.get("tao_type"))) for c in configs.values()}
     assert kinds == {"vinewtonrsls", "vinewtonssls", "tron", "gpcg", "bnls", "bqpip", "blmvm"}
-
-
-def test_driver_reads_inner_solvers_and_tolerances():
-    driver = _driver()
-    options = {"pc_type": "hypre", "tao_bnk_pc_type": "gamg", "pc_factor_mat_solver_type": "mumps", "ksp_type": "cg"}
-    assert driver.required_inner(options) == ["hypre", "gamg", "mumps"]
-    assert driver.tolerance_options("snes", None) == {}
-    assert driver.tolerance_options("snes", 1e-6) == {"snes_rtol": 1e-6, "snes_stol": 1e-6, "ksp_rtol": 1e-6}
-    assert driver.tolerance_options("tao", 1e-6)["tao_gttol"] == 1e-6
-    # from an initial guess: absolute tests against the cold start's residual ‖b‖ = 2
-    assert driver.tolerance_options("snes", 1e-6, 2.0) == {
-        "snes_rtol": 0.0,
-        "snes_atol": 2e-6,
-        "snes_stol": 1e-6,
-        "ksp_rtol": 1e-6,
-    }
-    warm = driver.tolerance_options("tao", 1e-6, 2.0)
-    assert (warm["tao_gatol"], warm["tao_gttol"], warm["tao_grtol"]) == (2e-6, 0.0, 0.0)
 
 
 def _answer(u_status: str = "done", converged: bool = True, reason: str = "CONVERGED_GTTOL") -> dict:
@@ -137,58 +112,17 @@ def _system(tmp: Path, N: int) -> dict:
     }
 
 
-def _interpreter(tmp: Path, kind: str) -> str:
-    """A peer interpreter that cannot run the peers: missing, ours (numpy, no petsc4py), one
-    without numpy (site-packages off), one whose petsc4py fails to import, one that crashes, not
-    executable, one that prints something else than the probe's JSON."""
-    if kind == "missing":
-        return "/nonexistent/python3"
-    if kind == "project":
-        return sys.executable
-    script = tmp / f"python-{kind}"
-    body = {
-        "no_numpy": f'exec "{sys.executable}" -S -I "$@"',
-        "broken_petsc4py": f'PYTHONPATH="{tmp / "fake"}" exec "{sys.executable}" "$@"',
-        "crash": "echo 'Segmentation fault' >&2; exit 139",
-        "not_executable": "",
-        "garbage": "echo 'Welcome to Python'",
-    }[kind]
-    fake = tmp / "fake/petsc4py"
-    fake.mkdir(parents=True)
-    (fake / "__init__.py").write_text("raise RuntimeError('petsc4py built against another PETSc')\n")
-    script.write_text(f"#!/bin/sh\n{body}\n")
-    script.chmod(0o644 if kind == "not_executable" else 0o755)
-    return str(script)
-
-
-INTERPRETERS = {
-    "missing": "not found",
-    "project": "petsc4py not importable",
-    "no_numpy": "numpy not importable",
-    "broken_petsc4py": "RuntimeError: petsc4py built against another PETSc",
-    "crash": "Segmentation fault",
-    "not_executable": "PermissionError",
-    "garbage": "not the probe's JSON answer: Welcome to Python",
-}
-
-
-@pytest.mark.parametrize("kind", sorted(INTERPRETERS))
-def test_any_failure_to_start_the_peer_is_unavailable_with_its_reason(tmp_path, kind):
-    found = peers.probe(_interpreter(tmp_path, kind), DRIVER)
-    assert found["petsc4py"] is False and INTERPRETERS[kind] in found["error"], found
-
-
 @pytest.mark.parametrize("kind", ["missing", "project", "no_numpy"])
 def test_without_petsc4py_the_peers_are_skipped(tmp_path, kind):
     """No interpreter, or one without (a compatible) petsc4py or numpy: every run ``skipped`` with the reason."""
-    python = _interpreter(tmp_path, kind)
+    python = fake_interpreter(tmp_path, kind)
     inputs = _system(tmp_path, 11)
     spec = SolverConfig("p", "petsc_snes", "p", {"snes_type": "vinewtonrsls"}).as_dict()
     at = SceneMesh(PROBLEM, 11, "sw_ne")
     info = wp.measure_stage(at, spec, [1e-6], 30.0, inputs, tmp_path / "out.json", peer_python=python, timing=FAST)
     records = info["records"]
     assert [r["status"] for r in records] == ["skipped", "skipped"]
-    assert all(INTERPRETERS[kind] in r["reason"] for r in records) and not info["peer"]["petsc4py"]
+    assert all(FAKE_INTERPRETERS[kind] in r["reason"] for r in records) and not info["peer"]["petsc4py"]
 
 
 # the status at tolerance 1e-10 of each shipped peer on N = 21 and 41 (PETSc 3.18, Debian 12)
@@ -259,7 +193,7 @@ def test_peer_from_an_initial_guess(tmp_path, petsc_probe, name):
     inputs = _system(tmp_path, 41)
     config = shipped_peers()[name]
     exact = np.load(inputs["exact"])["u"]
-    route = peers.PeerRoute(TEST_PEER_PYTHON, str(DRIVER), str(inputs["system"]), petsc_probe)
+    route = PeerRoute(TEST_PEER_PYTHON, str(DRIVER), str(inputs["system"]), petsc_probe)
     at = SceneMesh(PROBLEM, 41, "sw_ne")
     A, b, boundary = load_system(inputs["system"], 41)
     disc = DiscreteProblem(at.problem, 41, "sw_ne", at.mesh(), A, b, boundary)
@@ -283,7 +217,7 @@ def test_a_peer_factorisation_runs_on_one_thread(tmp_path, petsc_probe):
     for name, env in [("petsc_rsls_cholmod", peers._env()), ("petsc_tron_boomeramg", peers._env()),
                       ("unlimited", {k: v for k, v in os.environ.items() if not k.startswith("OMP_")})]:
         config = configs["petsc_rsls_cholmod" if name == "unlimited" else name]
-        request = {"kind": peers.PEER_SOLVERS[config.solver], "options": dict(config.options), "tol": 1e-8}
+        request = {"kind": PEER_SOLVERS[config.solver], "options": dict(config.options), "tol": 1e-8}
         (tmp_path / "request.json").write_text(json.dumps(request), encoding="utf-8")
         out = tmp_path / name
         subprocess.run([TEST_PEER_PYTHON, str(DRIVER), "solve", str(inputs["system"]), str(tmp_path / "request.json"),

@@ -9,7 +9,7 @@ import json
 
 from signorini.pipeline.jobenv import THREAD_VARIABLES
 from signorini.studies.work_precision.findings import findings
-from signorini.studies.work_precision.report import fmt_fit, fmt_ratio, fmt_timed, work_precision_md
+from signorini.studies.work_precision.report import work_precision_md
 from signorini.studies.work_precision.table import Run
 from signorini.timing import Protocol
 
@@ -153,15 +153,6 @@ def test_the_protocol_line_reports_what_happened(measurements):
     assert "of the 12 runs timed under it, 3 stopped on agreement, 3 on the budget, 3 at the cap of 7 samples" in line
     assert "The 9 runs with an answer have 3–3 samples (median 3); 0 have fewer than 3, 0 a single one." in line
     assert "over the 9 runs with two or more: median 4%; over the 6 of them under 0.050 s" in line
-
-
-def test_times_ratios_and_exponents_are_printed_with_their_intervals():
-    assert fmt_timed({"value": 1.58, "lo": 1.32, "hi": 1.82, "interval": True, "samples": 5}) == "1.6 s (1.3–1.8)"
-    assert fmt_timed({"value": 12.4, "lo": 0, "hi": 0, "interval": False, "samples": 1}) == "12.4 s (1 sample)"
-    assert fmt_ratio({"value": 0.9, "lo": 0.7, "hi": 1.4, "interval": True, "verdict": "tie"}) == "tie (×0.70–1.4)"
-    assert fmt_ratio({"value": 2.4, "lo": 2.2, "hi": 2.8, "interval": True, "verdict": "above"}) == "×2.4 (2.2–2.8)"
-    assert fmt_fit({"value": -0.95, "lo": -0.97, "hi": -0.93, "interval": True}) == "−0.95 (−0.97 to −0.93)"
-    assert fmt_fit({"value": 1.05, "lo": 1.01, "hi": 1.11, "interval": True}) == "1.05 (1.01–1.11)"
 
 
 def test_inaccurate_answers_are_grouped_with_their_worst_ratio_from_the_recorded_numbers(run_row):

@@ -11,11 +11,12 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from signorini import intervals
+from signorini.peers import PEER_SOLVERS
 from signorini.plotting import new_figure, save, styled
 from signorini.published import PAPER_NORMS, label_tex
-from signorini.studies.work_precision import uncertainty as unc
 from signorini.studies.work_precision.routes import Kind
-from signorini.studies.work_precision.study import FIGURE_NORMS, PEER_SOLVERS
+from signorini.studies.work_precision.study import FIGURE_NORMS
 from signorini.studies.work_precision.table import Run, sweeps
 
 if TYPE_CHECKING:
@@ -28,7 +29,7 @@ TOL_MARKERS = {"exact": "P", "default": "*", "1e-02": "o", "1e-04": "s", "1e-06"
 # (#F0E442), too weak on white for hollow markers, replaced by a mid grey
 OKABE_ITO = ["#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#000000", "#8C8C8C"]
 MAX_SERIES = len(OKABE_ITO)
-FAMILIES = {"snes": "PETSc SNES VI", "tao": "PETSc TAO"}  # by the kind of PETSc object (study.PEER_SOLVERS)
+FAMILIES = {"snes": "PETSc SNES VI", "tao": "PETSc TAO"}  # by the kind of PETSc object (peers.PEER_SOLVERS)
 TIME_LABEL = "solve time [CPU s]"
 # the time panel's series beyond the figure's palette (exact configurations the work-precision figure
 # leaves out): Paul Tol's wine, teal, olive and indigo, none of them an Okabe–Ito colour
@@ -220,7 +221,7 @@ def cost_panel(runs: Sequence[Run], ax: Axes | None = None) -> Axes:
     values = np.array([[r.total[n] for n in norms] for r in ex])  # runs × norms
     for k, norm in enumerate(norms):
         e = values[:, k]
-        slope = unc.exponent(total, e).value  # the least-squares slope the findings fit too
+        slope = intervals.exponent(total, e).value  # the least-squares slope the findings fit too
         label = f"{label_tex(norm, domain=False)} (slope {slope:.2f})"
         ax.loglog(total, e, marker=MARKERS[k % len(MARKERS)], markersize=4, label=label)
     # each mesh's h above its largest error, horizontal; the limits leave room for these labels
@@ -258,7 +259,7 @@ def time_series(runs: Sequence[Run], table1_norms: Sequence[str] | None = None) 
     series = {}
     for k, config in enumerate(exact + peers):
         rows = sorted((r for r in sel if r.config == config), key=lambda r: r.N)
-        times = [unc.run_time(r) for r in rows]
+        times = [r.time_estimate() for r in rows]
         value = np.array([t.value for t in times])
         lo, hi = np.array([t.interval or (t.value, t.value) for t in times]).T
         n_dofs = np.array([r.n_dofs for r in rows], dtype=float)
@@ -268,7 +269,7 @@ def time_series(runs: Sequence[Run], table1_norms: Sequence[str] | None = None) 
             "n_dofs": n_dofs,
             "time_s": value,
             "yerr": [value - lo, hi - value],
-            "p": unc.exponent(list(n_dofs), times).value,
+            "p": intervals.exponent(list(n_dofs), times).value,
             "color": palette.get(config) or next(extra),
             "marker": MARKERS[k % len(MARKERS)],
         }
@@ -279,7 +280,7 @@ def time_series(runs: Sequence[Run], table1_norms: Sequence[str] | None = None) 
 def time_panel(runs: Sequence[Run], ax: Axes | None = None) -> Axes:
     """Where the time goes: assembly and the selected runs of the exact configurations against the
     unknowns; dashed: the drawn PETSc peers' selected runs, with their exponents (``time_series``);
-    bars: the times' intervals (``uncertainty``); the legend below the axes."""
+    bars: the times' intervals (``intervals``); the legend below the axes."""
     ax = ax if ax is not None else new_figure(figsize=(5.5, 6.0)).subplots()
     ex = _exact_runs(runs)
     n = np.array([r.n_dofs for r in ex], dtype=float)

@@ -1,6 +1,6 @@
 """Findings of the work-precision study: what ``work_precision.md`` states, in numbers
 (``findings``), computed from the runs of the measurement table (``table.Run``) through one
-selection rule (``selection``) and the intervals of ``uncertainty``; ``report`` renders them.
+selection rule (``selection``) and the intervals of ``intervals``; ``report`` renders them.
 
 Times are ranked and divided in CPU seconds (``time_s``), not in the reference units
 (``time_ref``): on this machine the reference kernel's time varies from sample to sample about as
@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from signorini.studies.work_precision import uncertainty as unc
+from signorini import intervals
 from signorini.studies.work_precision.routes import Kind
 from signorini.studies.work_precision.selection import (
     digits_unchanged,
@@ -37,10 +37,10 @@ COST_NORMS = ("L4", "W14")  # the norms of the exact solver's cost of accuracy
 
 
 def _time(run: Run | None) -> dict:
-    """A run's time with its interval (``uncertainty``) and its number of samples; NaN without a run."""
+    """A run's time with its interval (``intervals``) and its number of samples; NaN without a run."""
     if run is None or not math.isfinite(run.time_s):
         return {"value": NAN, "lo": NAN, "hi": NAN, "interval": False, "samples": 0}
-    return {**unc.run_time(run).summary(), "samples": int(unc.samples(run.times).size)}
+    return {**run.time_estimate().summary(), "samples": int(intervals.samples(run.times).size)}
 
 
 def _cell_changes(runs: Sequence[Run], Ns: Sequence[int], t1: Sequence[str], chosen: Mapping) -> list[dict]:
@@ -72,14 +72,14 @@ def _cell_changes(runs: Sequence[Run], Ns: Sequence[int], t1: Sequence[str], cho
 
 class Selected:
     """The selected runs (``selection``): ``tolerance`` per configuration, ``run[(config, N)]`` and
-    its time's bootstrap ``est[(config, N)]`` (``uncertainty.run_time``)."""
+    its time's bootstrap ``est[(config, N)]`` (``Run.time_estimate``)."""
 
     def __init__(self, runs: Sequence[Run], t1: Sequence[str]):
         self.tolerance = selected_tolerances(runs, t1)
         self.run = {(r.config, r.N): r for r in runs if self.tolerance.get(r.config) == r.tol_label}
-        self.est = {key: unc.run_time(r) for key, r in self.run.items()}
+        self.est = {key: r.time_estimate() for key, r in self.run.items()}
 
-    def at(self, N: int, configs: Sequence[str] | None = None) -> dict[str, unc.Estimate]:
+    def at(self, N: int, configs: Sequence[str] | None = None) -> dict[str, intervals.Estimate]:
         """Config → time estimate of the selected runs at ``N`` (of ``configs``, default all)."""
         return {c: e for (c, n), e in self.est.items() if n == N and (configs is None or c in configs)}
 
@@ -88,9 +88,9 @@ class Selected:
         return {"config": config, "tol_label": self.tolerance[config], **_time(self.run[(config, N)])}
 
 
-def _ratio(num: unc.Estimate, den: unc.Estimate) -> dict:
-    r = unc.ratio(num, den)
-    return {**r.summary(), "verdict": unc.verdict(r)}
+def _ratio(num: intervals.Estimate, den: intervals.Estimate) -> dict:
+    r = intervals.ratio(num, den)
+    return {**r.summary(), "verdict": intervals.verdict(r)}
 
 
 def _fastest(sel: Selected, N: int) -> list[dict]:
@@ -130,7 +130,7 @@ def _scaling(Ns: Sequence[int], sel: Selected) -> dict[str, dict]:
     """Per configuration with a selected tolerance: the exponent ``p`` of ``time ∝ unknowns^p``,
     least squares through its selected runs on every mesh, with its interval."""
     return {
-        config: unc.exponent([float(sel.run[(config, N)].n_dofs) for N in Ns], [sel.est[(config, N)] for N in Ns])
+        config: intervals.exponent([float(sel.run[(config, N)].n_dofs) for N in Ns], [sel.est[(config, N)] for N in Ns])
         .summary()
         for config, label in sel.tolerance.items()
         if label is not None
@@ -175,7 +175,7 @@ def _exact_cost(Ns: Sequence[int], sel: Selected) -> dict[str, Any]:
         return {}
     runs = [sel.run[(first, N)] for N in Ns]
     build = [r.build_s for r in runs]
-    total = [unc.shifted(sel.est[(first, N)], b) for N, b in zip(Ns, build, strict=True)]
+    total = [intervals.shifted(sel.est[(first, N)], b) for N, b in zip(Ns, build, strict=True)]
     exact = {
         "config": first,
         "label": runs[0].label,
@@ -187,7 +187,7 @@ def _exact_cost(Ns: Sequence[int], sel: Selected) -> dict[str, Any]:
     for n in COST_NORMS:
         if n in runs[0].total and len(runs) >= 2:
             err = [r.total[n] for r in runs]
-            slope = unc.exponent(total, err).summary()
+            slope = intervals.exponent(total, err).summary()
             factor = {k: 10.0 ** (-1.0 / slope[k]) if slope[k] < 0 else math.inf for k in ("value", "lo", "hi")}
             exact |= {f"total_{n}": err, f"slope_{n}": slope, f"time_factor_per_digit_{n}": factor}
     return exact
@@ -257,7 +257,7 @@ def _protocol(runs: Sequence[Run], protocol: Protocol) -> dict[str, Any]:
     timed = [r for r in runs if r.status != "skipped"]
     stop = [r.time_stop for r in timed]
     answered = [r for r in timed if r.status in ("ok", "inaccurate")]
-    counts = np.array([unc.samples(r.times).size for r in answered], dtype=int)
+    counts = np.array([intervals.samples(r.times).size for r in answered], dtype=int)
     spread, seconds = _numbers(answered, "spread"), _numbers(answered, "time_s")
     several = counts >= 2
     short_s = protocol.budget_s / protocol.min_repeats
@@ -345,7 +345,7 @@ def findings(
     """The numbers ``work_precision.md`` states, computed from the runs of the measurement table:
     one entry per helper above (its docstring says what the entry holds).  Every time is a
     run's median with its interval, ``{value, lo, hi, interval, samples}``, every ratio
-    ``{value, lo, hi, interval, verdict}`` (``uncertainty``); every time compared is a selected run
+    ``{value, lo, hi, interval, verdict}`` (``intervals``); every time compared is a selected run
     (``selection``) at the selected tolerance of its configuration (``tolerance``; ``needed``: of the
     configurations that are not exact).  ``paper_l4`` (N → published ``L⁴`` error) and
     ``paper_l4_eoc`` (N → published EOC) are the columns the ``L⁴`` errors and EOCs are compared

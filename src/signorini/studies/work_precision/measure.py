@@ -53,13 +53,13 @@ from typing import Any
 import numpy as np
 
 from signorini.fem.norms.p1 import p1_norms
+from signorini.peers import PEER_PYTHON
 from signorini.pipeline.artifacts import load_json, save_json
 from signorini.studies.scene.store import SceneMesh, load_system, read_norm
 from signorini.studies.work_precision.routes import Attempt
 from signorini.studies.work_precision.study import (
     EXACT_LABEL,
     GROWTH_EXPONENT,
-    PEER_PYTHON,
     SolverConfig,
     accuracy_status,
     table_solver,
@@ -105,11 +105,11 @@ def timed_call(
 ) -> Callable[[], tuple]:
     """The call ``run_solver`` times, for a round-robin of several configurations
     (``timing.round_robin``; ``benchmarks/``): in process ``(SolveResult, None)``; a peer
-    ``((answer, u), (solve wall s, solve CPU s))`` (``peers.driver_call``, ``peers.outcome``)."""
+    ``((answer, u), (solve wall s, solve CPU s))`` (``signorini.peers.driver_call``, ``peers.outcome``)."""
     if config.peer:
-        from signorini.studies.work_precision.peers import driver_call
+        from signorini.peers import driver_call
 
-        return driver_call(config, peer, tol, time_limit_s, initial_guess)
+        return driver_call(peer, config.solver, config.options, tol, time_limit_s, initial_guess)
     limit = None if config.exact else time_limit_s
     return config.runner.call(config, disc, tol, config.runner.settings(config, tol, limit)[0])
 
@@ -160,7 +160,7 @@ def _fingerprint(u: np.ndarray) -> str:
 class _Inputs:
     """What every run of one job shares: the system, the exact solution, the discretisation errors,
     the previous mesh's records, the protocol's timer and reference kernel, the machine record
-    (JSON), a peer's route (``peers.PeerRoute``) and the cascade's start (``_cascade_start``)."""
+    (JSON), a peer's route (``signorini.peers.PeerRoute``) and the cascade's start (``_cascade_start``)."""
 
     disc: Any  # fem.discrete.DiscreteProblem
     exact: np.ndarray
@@ -193,7 +193,7 @@ def _load_inputs(at: SceneMesh, config: SolverConfig, inputs: Mapping[str, Any],
     inp = _Inputs(disc, at.load_solution(inputs["exact"]), disc_err, build_s, prev, conventions, timer, kernel,
                   json.dumps(machine_record(), sort_keys=True))
     if config.peer:
-        from signorini.studies.work_precision.peers import PeerRoute, probe
+        from signorini.peers import PeerRoute, probe
 
         python, driver = settings["peer_python"] or PEER_PYTHON, str(inputs["peer_driver"])
         inp.peer = PeerRoute(python, driver, str(inputs["system"]), probe(python, driver))
@@ -378,7 +378,7 @@ def measure_stage(
     discretisation errors, which also define the norms measured) and ``prev`` (this
     configuration's artifact on the previous mesh, or None, for ``skip_reason``).
     ``time_limit_s`` limits each QP solve (the solver's own option; a peer's process is killed
-    after it plus ``peers.START_SLACK_S``) and drives ``skip_reason`` (for every configuration,
+    after it plus ``signorini.peers.START_SLACK_S``) and drives ``skip_reason`` (for every configuration,
     the active-set ones included).  A PETSc peer runs ``inputs["peer_driver"]`` under
     ``peer_python``; its probe (PETSc version, inner solvers) is saved with the records.
     ``timing``: the timing protocol's parameters (``timing.Protocol``; the study's ``timing`` block).

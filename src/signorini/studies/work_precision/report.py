@@ -17,10 +17,10 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from signorini.formatting import fmt_rel, fmt_time, h_label, md_table, sci_md
+from signorini import intervals
+from signorini.formatting import fmt_factor, fmt_fit, fmt_ratio, fmt_rel, fmt_time, fmt_timed, h_label, md_table, sci_md
 from signorini.pipeline.jobenv import THREAD_VARIABLES
 from signorini.published import TABLE1_NORMS, label_md
-from signorini.studies.work_precision import uncertainty as unc
 from signorini.studies.work_precision.findings import COST_NORMS, findings
 from signorini.studies.work_precision.selection import swept
 from signorini.studies.work_precision.study import EXACT_LABEL, REPORT_TEMPLATE, tolerance_key
@@ -45,45 +45,6 @@ def _sections(path: Path = REPORT_TEMPLATE) -> dict[str, str]:
 def prose(section: str, /, **fields: object) -> str:
     """The template's ``section`` with its ``fields`` filled in (``str.format``)."""
     return _sections()[section].format(**fields)
-
-
-def fmt_timed(t: Mapping) -> str:
-    """A time with its interval: ``1.6 s (1.3–1.8)``, ``12.4 s (1 sample)``, ``—``."""
-    if not math.isfinite(t["value"]):
-        return "—"
-    if t["interval"]:
-        lo, hi = (fmt_time(t[k]).removesuffix(" s") for k in ("lo", "hi"))
-        return f"{fmt_time(t['value'])} ({lo}–{hi})"
-    return f"{fmt_time(t['value'])} (1 sample)" if t.get("samples") == 1 else fmt_time(t["value"])
-
-
-def _x(x: float) -> str:
-    return f"{x:.2f}" if x < 1.0 else (f"{x:.1f}" if x < 10.0 else f"{x:.0f}")
-
-
-def fmt_ratio(r: Mapping) -> str:
-    """A ratio with its interval (``×2.0 (1.6–2.4)``), a tie (``tie (×0.82–1.3)``) or without one."""
-    if not math.isfinite(r["value"]):
-        return "—"
-    if r["verdict"] == "tie":
-        return f"tie (×{_x(r['lo'])}–{_x(r['hi'])})"
-    if r["interval"]:
-        return f"×{_x(r['value'])} ({_x(r['lo'])}–{_x(r['hi'])})"
-    return f"×{_x(r['value'])} (undetermined: one sample each)"
-
-
-def _signed(x: float) -> str:
-    return f"{x:.2f}".replace("-", "−")
-
-
-def fmt_fit(p: Mapping) -> str:
-    """An exponent or slope with its interval: ``1.05 (1.01–1.11)``, ``−0.95 (−0.97 to −0.93)``."""
-    if not math.isfinite(p["value"]):
-        return "—"
-    if not p["interval"]:
-        return _signed(p["value"])
-    dash = " to " if min(p["lo"], p["hi"]) < 0 else "–"
-    return f"{_signed(p['value'])} ({_signed(p['lo'])}{dash}{_signed(p['hi'])})"
 
 
 def _table(section: str, header: Sequence[str], rows: Sequence[Sequence[str]], align: str = "r", **fields) -> list:
@@ -166,8 +127,8 @@ def _setup(runs: Sequence[Run], found: Mapping, source: str, protocol: Protocol)
 def _rules(runs: Sequence[Run], found: Mapping) -> list[str]:
     """The selection rule and the intervals, stated once."""
     numbers = {"n_norms": len(found["table1_norms"]), "n_meshes": len(found["N"]), "meshes": _meshes(found)}
-    intervals = {"level": unc.LEVEL, "resamples": unc.RESAMPLES, "seed": unc.SEED}
-    return ["", prose("rules", tolerances=_swept(runs), **numbers, **intervals)]
+    bootstrap = {"level": intervals.LEVEL, "resamples": intervals.RESAMPLES, "seed": intervals.SEED}
+    return ["", prose("rules", tolerances=_swept(runs), **numbers, **bootstrap)]
 
 
 def _eoc_brief(found: Mapping) -> list[str]:
@@ -254,8 +215,8 @@ def _cost_brief(exact: Mapping) -> list[str]:
     for n, name in names.items():
         s, f = exact[f"slope_{n}"], exact[f"time_factor_per_digit_{n}"]
         if s["value"] < 0 and (not s["interval"] or s["hi"] < 0):
-            bounds = f" ({_x(f['lo'])}–{_x(f['hi'])})" if s["interval"] else ""
-            clauses.append(prose("cost_digit", norm=name, factor=_x(f["value"]), bounds=bounds))
+            bounds = f" ({fmt_factor(f['lo'])}–{fmt_factor(f['hi'])})" if s["interval"] else ""
+            clauses.append(prose("cost_digit", norm=name, factor=fmt_factor(f["value"]), bounds=bounds))
         else:
             clauses.append(prose("cost_flat", norm=name))
     return [prose("cost", label=exact["label"], fits=fits, clauses="; ".join(clauses))]

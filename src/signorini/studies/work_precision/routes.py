@@ -152,7 +152,7 @@ class Cvxpy(Runner):
 
 
 class Peer(Runner):
-    """A PETSc peer: run by its driver (``peers.run_peer``), not in this process."""
+    """A PETSc peer: run by its driver (``peers.run_peer``, through ``signorini.peers``), not in this process."""
 
     kind = Kind.PEER
 

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from signorini.fem.mesh import DEFAULT_DIAGONAL
+from signorini.peers import PEER_SOLVERS
 from signorini.published import FIGURE3_NORMS
 from signorini.solvers import EXACT_SOLVERS
 from signorini.studies.work_precision import routes
@@ -20,10 +21,6 @@ FIGURE_NORMS = FIGURE3_NORMS  # the panel rows of work_precision.{pdf,png}
 EXACT_LABEL = "exact"  # the tolerance label of the exact (active-set) runs
 DEFAULT_LABEL = "default"  # the tolerance label of a solver's own default tolerance
 GROWTH_EXPONENT = 1.5  # predicted time ∝ (number of unknowns)^GROWTH_EXPONENT
-# PETSc peers, run by an external interpreter with petsc4py (studies.work_precision.peers):
-# solver name → the kind of PETSc object the driver builds
-PEER_SOLVERS = {"petsc_snes": "snes", "petsc_tao": "tao"}
-PEER_PYTHON = "/usr/bin/python3"  # Debian's python3-petsc4py-real is built for it
 CASCADE_START = "cascade"
 WARM_SUFFIX = "_ws"  # name of a peer's variant started from the cascade (``same_warm_start``)
 # the prose of work_precision.md (report.prose): a file of the package that no import names, so the

@@ -8,6 +8,7 @@ import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, fields
 
+from signorini import intervals
 from signorini.pipeline.artifacts import CorruptArtifactError, atomic_write_csv, load_json
 from signorini.studies.work_precision.routes import Kind
 from signorini.studies.work_precision.study import kind_of, table_route, tolerance_key
@@ -82,6 +83,12 @@ class Run:
         """The run as a row of the table: ``ID_COLUMNS``, then its errors by norm."""
         row = {name: getattr(self, name) for name in _KINDS}
         return row | {f"{kind}_{n}": v for kind in ERRORS for n, v in getattr(self, kind).items()}
+
+    def time_estimate(self) -> intervals.Estimate:
+        """The run's time (``time_s``) and the bootstrap of the median of its samples
+        (``intervals.median``, keyed by mesh, configuration and tolerance), shifted by what ``time_s``
+        adds to that median (a cascade start's cost; the samples' rounding)."""
+        return intervals.median(intervals.samples(self.times), (self.N, self.config, self.tol_label), self.time_s)
 
     @property
     def kind(self) -> Kind:

@@ -1,29 +1,25 @@
-"""Intervals of the work-precision study's times, of their ratios and of the exponents fitted to them.
+"""Intervals of measured times, of their ratios and of the exponents fitted to them.
 
-A run's time (``time_s``) is the median of its timed samples (``times``, CPU seconds per call),
-plus, for a PETSc peer started from the cascade, the start's cost, timed once per job and added as
-a constant.  Its interval: the ``LEVEL`` percentile interval of a bootstrap of that median —
-``RESAMPLES`` resamples, with replacement, of the run's samples, drawn by a generator seeded by
-``SEED`` and the run's mesh, configuration and tolerance, so that every rendering gives the same
-intervals whatever else the table holds.  A ratio of two runs' times resamples the two runs
-independently; a least-squares exponent (log time against log unknowns, log error against log
-time) is refitted through each resample.  These intervals cover the variation of the samples only,
-not a departure from the fitted power law.  A run with a single sample has no spread to resample:
-its bootstrap is its value alone, and a ratio or fit all of whose runs have one sample has no interval.
+A time measured several times (its *samples*, CPU seconds per call) is summarised by their median.
+Its interval: the ``LEVEL`` percentile interval of a bootstrap of that median — ``RESAMPLES``
+resamples, with replacement, of the samples, drawn by a generator seeded by ``SEED`` and a key of
+the measurement (``median``), so that every rendering gives the same intervals whatever else was
+measured.  A ratio of two times resamples the two independently; a least-squares exponent (log time
+against log unknowns, log error against log time) is refitted through each resample.  These
+intervals cover the variation of the samples only, not a departure from a fitted power law.  A time
+with a single sample has no spread to resample: its bootstrap is its value alone, and a ratio or fit
+all of whose times have one sample has no interval.  A ratio whose interval contains 1 is a tie
+(``verdict``).
 """
 
 from __future__ import annotations
 
 import math
 import zlib
-from collections.abc import Sequence
+from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
-
-if TYPE_CHECKING:
-    from signorini.studies.work_precision.table import Run
 
 SEED = 0
 RESAMPLES = 2000
@@ -31,7 +27,7 @@ LEVEL = 0.95  # the probability the percentile interval holds
 
 
 def samples(times: str) -> np.ndarray:
-    """The CPU seconds of a run's samples (its ``times`` cell: space-separated; none: empty)."""
+    """The CPU seconds of a measurement's samples written as one text (space-separated; none: empty)."""
     return np.array([float(t) for t in times.split()], dtype=float)
 
 
@@ -58,14 +54,15 @@ class Estimate:
         return {"value": self.value, "lo": lo, "hi": hi, "interval": self.spread}
 
 
-def run_time(run: Run) -> Estimate:
-    """A run's time (``time_s``) and the bootstrap of the median of its samples, shifted by what
-    ``time_s`` adds to that median (a cascade start's cost; the samples' rounding)."""
-    value = float(run.time_s)
-    t = samples(run.times)
+def median(times: np.ndarray, key: Sequence[Hashable], value: float | None = None) -> Estimate:
+    """The median of ``times`` (the samples) and its bootstrap, seeded by ``key`` (what identifies the
+    measurement: the same resamples whatever else was measured); ``value``: the time reported when it
+    is not the median itself (a constant added: a start's cost, the samples' rounding), the
+    resamples shifted alike."""
+    t = np.asarray(times, dtype=float)
+    value = float(np.median(t)) if value is None else float(value)
     if t.size < 2:
         return Estimate(value, np.full(RESAMPLES, value), False)
-    key = (run.N, run.config, run.tol_label)  # the same resamples whatever else the table holds
     rng = np.random.default_rng([SEED, *(zlib.crc32(str(k).encode("utf-8")) for k in key)])
     medians = np.median(t[rng.integers(0, t.size, size=(RESAMPLES, t.size))], axis=1)
     return Estimate(value, medians + (value - float(np.median(t))), True)
