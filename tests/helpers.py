@@ -208,7 +208,9 @@ TEST_SCENES = {
 }
 # a small mesh-family study (shipped: up to 1 M unknowns per family): the reference, a Delaunay family
 # of two seeds and a graded family
-_MESH_SCENE = {"N": [9, 17, 33], "norms": ["L4", "W14", "H12", "L4_true"], "solver": "active_set", "problem": PROBLEM}
+# (as shipped, the convention norms of a mesh in one job)
+_MESH_SCENE = {"N": [9, 17, 33], "norms": ["L4", "W14", "H12", "L4_true"], "solver": "active_set", "problem": PROBLEM,
+               "norm_jobs": "per_mesh"}
 TEST_SCENES |= {
     "meshes_fk": _MESH_SCENE,
     "meshes_delaunay": {**_MESH_SCENE, "mesh": {"family": "delaunay", "seed": 0}},

@@ -61,6 +61,25 @@ def test_installed_qp_solvers():
     assert "CLARABEL" in QP_SOLVER_NAMES and "OSQP" in QP_SOLVER_NAMES
 
 
+def test_the_installed_qp_solvers_are_found_from_cvxpys_list_without_importing_it(monkeypatch):
+    """Every QP-capable solver of cvxpy has its modules listed; a solver one of whose modules is
+    missing is not installed; and finding them imports no cvxpy (the workflow asks while it plans)."""
+    import importlib.util
+    import subprocess
+    import sys
+
+    from cvxpy.reductions.solvers.defines import QP_SOLVERS
+
+    from signorini.solvers import cvxpy_qp
+
+    assert set(cvxpy_qp.QP_SOLVER_MODULES) == set(QP_SOLVERS) | {"CLARABEL", "SCS"}
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec", lambda name, *a: None if name == "osqp" else real(name, *a))
+    assert installed_qp_solvers() == [s for s in QP_SOLVER_NAMES if s != "OSQP"]
+    code = "import sys; from signorini.solvers import installed_qp_solvers as f; f(); print('cvxpy' in sys.modules)"
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True).stdout.strip() == "False"
+
+
 @pytest.mark.parametrize("qp_solver", QP_SOLVER_NAMES)
 def test_cvxpy_solvers_agree_with_active_set(small_case, qp_solver):
     if qp_solver not in TIGHT:
