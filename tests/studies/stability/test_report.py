@@ -72,3 +72,23 @@ def test_the_page_defines_its_symbols_and_flags_exact_differences_only_above_the
     summary = next(x for x in md.splitlines() if x.startswith("- The other exact"))
     assert "in no_contact_N201, ABOVE 1e-12 and any recorded rounding floor in no_contact_N201;" in summary
     assert "*Rounding floor*" not in md
+
+
+def test_a_case_on_a_mesh_family_counts_contact_among_its_own_boundary_nodes():
+    """On a graded mesh B has more nodes than the 4N of a Friedrichs–Keller mesh: the case line
+    states the contact among the mesh's own m nodes, and the notation does not say m = 4N."""
+    from helpers import ROOT
+
+    from signorini.fem.problem import Problem
+    from signorini.pipeline.config import load_config
+    from signorini.studies.stability.atlas import Atlas, Case, parse_atlas
+    from signorini.studies.stability.cases import run_case
+
+    solvers = parse_atlas(load_config(ROOT / "workflow/config.yaml")["scenes"]["stability"]).solvers
+    case = Case("graded", "mesh", Problem().as_dict(), 8, solvers=("active_set",), mesh={"family": "graded"})
+    info, arrays = run_case(Atlas((case,), solvers, ("L4",), timeout_s=60), case)
+    m = info["n_constrained"]
+    assert m > 4 * case.N  # the grading adds boundary nodes near the free point
+    md = atlas_report(atlas_table([info], [arrays], ("L4",)), [info], ("L4",))
+    line = next(line for line in md.splitlines() if line.startswith("- **graded**"))
+    assert f"/{m} in contact" in line and "the m = 4N of B" not in md and "among the m nodes of B" in md

@@ -116,7 +116,7 @@ NOTATION = [
     "end with; the cvxpy columns: u_i ≤ 1e-8 ‖u‖∞), biactive when u_i = 0 and λ_i = 0 (strict "
     "complementarity, u_i + λ_i > 0, fails there). F is the set of nodes outside the exact solution's contact"
     " set, A_FF the block of A and u_F, b_F the entries of u, b on F; n/m in contact: the exact solver's "
-    "contact nodes among the m = 4N of B.",
+    "contact nodes among the m nodes of B (m = 4N on a Friedrichs–Keller mesh).",
     "- Certificate (`solvers.certificate`): with σ = max(‖A u‖∞, ‖b‖∞) the relative residuals are "
     "stationarity ‖A u − b − λ‖∞/σ, primal max(0, −min u_B)/‖u‖∞, dual max(0, −min λ_B)/σ and complementarity"
     " max_i |u_i λ_i|/(‖u‖∞ σ); KKT in a case line is the largest. ‖·‖∞ is the maximum norm (of a matrix: its"
