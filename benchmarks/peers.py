@@ -21,9 +21,11 @@ under a load above the cores redone.
 Keys: ``configs`` (per configuration: CPU ``time_s``, ``wall_s``, ``time_ref``, status under our
 KKT certificate, agreement with our solution, the protocol's counts and loads);
 ``same_warm_start`` (each method from the cascade start against our cascade) and
-``cold_against_cold`` (each method from u = 0 against our cold start): time ratios in reference
-units; ``fastest``: the fastest certified method of each comparison and its ratio, against the
-target (``TARGET_RATIO``: ours at least 5× faster).  Written atomically.
+``cold_against_cold`` (each method from u = 0 against our cold start): each method's CPU time over
+ours with its bootstrap interval and verdict (``signorini.intervals``: ``above``, ours faster;
+``tie``, the interval contains 1); ``fastest``: the fastest certified method of each comparison
+and its ratio, against the target (``TARGET_RATIO``: ours at least 5× faster, met when the whole
+interval lies above it).  Written atomically.
 """
 
 from __future__ import annotations
@@ -40,13 +42,15 @@ job_environment()  # one thread, like the peers (before numpy loads its BLAS)
 
 import numpy as np  # noqa: E402
 import yaml  # noqa: E402
-from race import race  # noqa: E402  (benchmarks/race.py, next to this script)
+from race import cpu_time, race  # noqa: E402  (benchmarks/race.py, next to this script)
 
+from signorini import intervals  # noqa: E402
 from signorini.fem.discrete import build  # noqa: E402
 from signorini.fem.problem import Problem  # noqa: E402
+from signorini.formatting import fmt_ratio  # noqa: E402
+from signorini.peers import PEER_PYTHON, PeerRoute, probe  # noqa: E402
 from signorini.pipeline.artifacts import save_json  # noqa: E402
 from signorini.pipeline.paths import PEER_DRIVER  # noqa: E402
-from signorini.peers import PEER_PYTHON, PeerRoute, probe  # noqa: E402
 from signorini.studies.work_precision.study import WARM_SUFFIX, study_configs  # noqa: E402
 from signorini.timing import Protocol, Timer  # noqa: E402
 
@@ -77,15 +81,21 @@ def write_system(disc, path: Path) -> None:
 
 
 def comparison(configs: dict, ours: str, methods: list[str], suffix: str) -> dict:
-    """Each method's time over ours in reference units, and the fastest certified one."""
-    ref = configs[ours]["time_ref"]
-    ratios = {m: configs[m + suffix]["time_ref"] / ref for m in methods if m + suffix in configs}
+    """Each method's CPU time over ours with its interval and verdict, and the fastest certified one."""
+    mine = cpu_time(ours, configs[ours])
+    ratios = {}
+    for m in methods:
+        rec = configs.get(m + suffix)
+        if rec is not None and "time_s" in rec:
+            r = intervals.ratio(cpu_time(m + suffix, rec), mine)
+            ratios[m] = r.summary() | {"verdict": intervals.verdict(r)}
     certified = [m for m in ratios if configs[m + suffix]["status"] == "ok"]
-    fastest = min(certified, key=ratios.get) if certified else None
+    fastest = min(certified, key=lambda m: ratios[m]["value"]) if certified else None
     verdict = None
     if fastest is not None:
-        verdict = {"method": fastest, "ratio": ratios[fastest], "target_min": TARGET_RATIO}
-        verdict["met"] = ratios[fastest] >= TARGET_RATIO
+        r = ratios[fastest]
+        verdict = {"method": fastest, "ratio": r, "target_min": TARGET_RATIO}
+        verdict["met"] = bool(r["interval"] and r["lo"] >= TARGET_RATIO)
     return {"ours": ours, "ratios": ratios, "fastest": verdict}
 
 
@@ -113,7 +123,7 @@ def main(argv: list[str] | None = None) -> int:
         system = Path(tmp) / "system.npz"
         write_system(disc, system)
         route = PeerRoute(args.python, str(ROOT / PEER_DRIVER), str(system), found)
-        raced = race(disc, configs, args.tol, timer, route, TIME_LIMIT_S)
+        raced = race(disc, configs, args.tol, timer, route, TIME_LIMIT_S, reference=args.route)
     timed = raced["configs"]
     result = {
         "N": args.N,
@@ -131,15 +141,15 @@ def main(argv: list[str] | None = None) -> int:
         "load_average_end": list(os.getloadavg()),
         "python": sys.version.split()[0],
         "note": "times: CPU seconds of the call (ours: solve_discrete; PETSc: the solve call, set-up apart); "
-        "ratios in reference units",
+        "ratios of CPU times with 95 % bootstrap intervals",
     }
     out.parent.mkdir(parents=True, exist_ok=True)
     save_json(out, result)
     for key in ("same_warm_start", "cold_against_cold"):
         c = result[key]
-        print(f"{key}: " + ", ".join(f"{m} ×{r:.1f}" for m, r in c["ratios"].items()))
+        print(f"{key}: " + ", ".join(f"{m} {fmt_ratio(r)}" for m, r in c["ratios"].items()))
         if c["fastest"]:
-            print(f"  fastest certified PETSc method: {c['fastest']['method']} ×{c['fastest']['ratio']:.1f}")
+            print(f"  fastest certified PETSc method: {c['fastest']['method']} {fmt_ratio(c['fastest']['ratio'])}")
     print(f"-> {out}")
     return 0
 

@@ -118,10 +118,10 @@ def _compare(out: dict, reference: str) -> None:
             ok = ref is not None and field in rec and field in ref and ref[field] > 0
             rec[key] = rec[field] / ref[field] if ok else math.nan
         if math.isfinite(rec["ratio_cpu"]):
-            ratio = intervals.ratio(_time(name, rec), _time(reference, ref))
+            ratio = intervals.ratio(cpu_time(name, rec), cpu_time(reference, ref))
             rec["ratio_cpu_interval"] = ratio.summary() | {"verdict": intervals.verdict(ratio)}
 
 
-def _time(name: str, rec: Mapping) -> intervals.Estimate:
+def cpu_time(name: str, rec: Mapping) -> intervals.Estimate:
     """A configuration's CPU time with its bootstrap (its samples, shifted by a start's cost)."""
     return intervals.median(intervals.samples(rec["times"]), (name,), rec["time_s"])

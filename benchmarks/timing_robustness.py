@@ -169,8 +169,8 @@ def time_change(quiet: dict, loaded: dict, key: str) -> float:
 
 
 def main(argv: list[str] | None = None) -> int:
-    from signorini.pipeline.artifacts import save_json
     from signorini.peers import PEER_PYTHON, probe
+    from signorini.pipeline.artifacts import save_json
     from signorini.timing import Protocol, Timer
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
