@@ -24,7 +24,9 @@ def meshes_scene_inputs(name):
         "mesh_jsons": each("mesh_json"),
         "mesh_npzs": each("mesh_npz"),
         "solutions": [rules.solve.output.npz.format(scene=name, N=N) for N in Ns],
-        "true_norms": norm_jsons(name, [n for n in scene["norms"] if n == true_name(n)]),
+        "true_norms": norm_jsons(
+            name, [n for n in scene["norms"] if n == true_name(n)]
+        ),
     }
 
 
@@ -33,7 +35,12 @@ def meshes_inputs(wildcards):
     paths_ = []
     for name in MESHES:
         spec = meshes_scene_inputs(name)
-        paths_ += [spec["errors"], *spec["mesh_jsons"], *spec["mesh_npzs"], *spec["solutions"]]
+        paths_ += [
+            spec["errors"],
+            *spec["mesh_jsons"],
+            *spec["mesh_npzs"],
+            *spec["solutions"],
+        ]
         paths_ += flat(spec["true_norms"])
     return paths_
 

@@ -155,7 +155,9 @@ for _scene in config["scenes"]:
             conda:
                 "../envs/signorini.yaml"
             resources:
-                mem_mb=lambda wc, scene=_scene: resources.mem_mb("norm", sized_N(wc, scene)),
+                mem_mb=lambda wc, scene=_scene: resources.mem_mb(
+                    "norm", sized_N(wc, scene)
+                ),
                 runtime=lambda wc, norms=_norms, scene=_scene: resources.norms_runtime_min(
                     sized_N(wc, scene), norms
                 ),
