@@ -56,7 +56,11 @@ def probe(python: str, driver: str | os.PathLike) -> dict:
         return _unavailable(f"peer interpreter {python} not found")
     try:
         proc = subprocess.run(
-            [python, str(driver), "probe"], capture_output=True, encoding="utf-8", timeout=PROBE_TIMEOUT_S, env=_env()
+            [python, str(driver), "probe"],
+            capture_output=True,
+            encoding="utf-8",
+            timeout=PROBE_TIMEOUT_S,
+            env=driver_environment(),
         )
     except (OSError, subprocess.SubprocessError) as err:
         return _unavailable(f"peer interpreter {python}: {type(err).__name__}: {err}")
@@ -78,7 +82,7 @@ def _unavailable(reason: str) -> dict:
     return {"petsc4py": False, "error": reason}
 
 
-def _env() -> dict[str, str]:
+def driver_environment() -> dict[str, str]:
     """The driver's environment: the one every job computes in (``pipeline.jobenv``: one BLAS/OpenMP
     thread, no oversubscription; freed memory reused)."""
     from signorini.pipeline.jobenv import job_environment
@@ -121,7 +125,9 @@ def driver_call(
             (tmp / "request.json").write_text(json.dumps(req), encoding="utf-8")
             command = [route.python, route.driver, "solve", route.system, str(tmp / "request.json"), name]
             try:
-                proc = subprocess.run(command, capture_output=True, encoding="utf-8", timeout=timeout, env=_env())
+                proc = subprocess.run(
+                    command, capture_output=True, encoding="utf-8", timeout=timeout, env=driver_environment()
+                )
             except subprocess.TimeoutExpired:
                 return ({"status": "timeout", "reason": f"time limit ({time_limit_s:g} s)"}, None), None
             if proc.returncode != 0 or not (tmp / "result.json").exists():

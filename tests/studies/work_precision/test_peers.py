@@ -21,7 +21,7 @@ from helpers import FAKE_INTERPRETERS, PROBLEM, ROOT, TEST_PEER_PYTHON, fake_int
 from helpers import PEER_DRIVER_FILE as DRIVER
 
 from signorini.fem.discrete import DiscreteProblem
-from signorini.peers import PEER_SOLVERS, PeerRoute, probe
+from signorini.peers import PEER_SOLVERS, PeerRoute, driver_environment, probe
 from signorini.pipeline.config import load_config
 from signorini.studies.scene.discretise import discretise_stage
 from signorini.studies.scene.norm import norm_stage
@@ -209,12 +209,12 @@ def test_peer_from_an_initial_guess(tmp_path, petsc_probe, name):
 @pytest.mark.peers
 def test_a_peer_factorisation_runs_on_one_thread(tmp_path, petsc_probe):
     """CHOLMOD's supernodal factorisation asks for an OpenMP pool of its own whatever the BLAS
-    thread variables say; in the study's environment (``peers._env``) the driver's process ends
+    thread variables say; in the study's environment (``signorini.peers.driver_environment``) the driver's process ends
     its solve with as many threads as one whose factorisation was never threaded (TRON with
     BoomerAMG), and without that environment's limits with more."""
     inputs = _system(tmp_path, 61)  # at N = 41 CHOLMOD's supernodes are too small to thread
     configs, answers = shipped_peers(), {}
-    for name, env in [("petsc_rsls_cholmod", peers._env()), ("petsc_tron_boomeramg", peers._env()),
+    for name, env in [("petsc_rsls_cholmod", driver_environment()), ("petsc_tron_boomeramg", driver_environment()),
                       ("unlimited", {k: v for k, v in os.environ.items() if not k.startswith("OMP_")})]:
         config = configs["petsc_rsls_cholmod" if name == "unlimited" else name]
         request = {"kind": PEER_SOLVERS[config.solver], "options": dict(config.options), "tol": 1e-8}
