@@ -129,3 +129,28 @@ def test_describe_mesh_counts_edges_angles_and_whether_the_free_point_is_a_verte
     assert odd["min_angle_deg"] == pytest.approx(45.0)
     plain = describe_mesh(union_jack(4))
     assert plain["n_triangles"] == 32 and "points_are_vertices" not in plain
+
+
+def test_a_mesh_block_defines_the_same_mesh_for_a_scene_and_an_atlas_case():
+    """``mesh_from_spec`` is the one reading of a ``mesh`` block: the paper's mesh for an empty one
+    (with its diagonal), a family with its parameters otherwise; scenes and atlas cases build
+    exactly its arrays."""
+    import numpy as np
+
+    from signorini.fem.mesh import friedrichs_keller
+    from signorini.fem.mesh_families import build_mesh, mesh_from_spec
+    from signorini.fem.problem import Problem
+    from signorini.studies.scene.store import SceneMesh
+    from signorini.studies.stability.atlas import Case
+    from signorini.studies.stability.cases import build_case
+
+    paper = mesh_from_spec(8, {}, "nw_se")
+    np.testing.assert_array_equal(paper.t, friedrichs_keller(8, "nw_se").t)
+    spec = {"family": "delaunay", "seed": 1}
+    mesh = mesh_from_spec(9, spec)
+    np.testing.assert_array_equal(mesh.p, build_mesh("delaunay", 9, seed=1).p)
+    scene = SceneMesh({"x0": 0.5, "R": 0.45, "A": 10, "c": 1}, 9, "sw_ne", mesh_spec=spec).build_mesh()
+    case = build_case(Case("d", "mesh", Problem().as_dict(), 9, mesh=spec)).mesh
+    for other in (scene, case):
+        np.testing.assert_array_equal(other.p, mesh.p)
+        np.testing.assert_array_equal(other.t, mesh.t)

@@ -35,7 +35,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from signorini.fem.mesh import friedrichs_keller
+from signorini.fem.mesh import DEFAULT_DIAGONAL, friedrichs_keller
 
 if TYPE_CHECKING:
     from skfem import MeshTri
@@ -190,6 +190,16 @@ def build_mesh(family: str, N: int, **params) -> MeshTri:
     if family not in MESH_FAMILIES:
         raise ValueError(f"unknown mesh family {family!r}; choose one of {sorted(MESH_FAMILIES)}")
     return MESH_FAMILIES[family](N, **params)
+
+
+def mesh_from_spec(N: int, spec: Mapping[str, Any], diagonal: str = DEFAULT_DIAGONAL) -> MeshTri:
+    """The mesh a ``mesh`` block (a scene's, an atlas case's) defines at ``N``: the paper's
+    Friedrichs–Keller mesh with ``diagonal`` for an empty block, else its family with its
+    parameters (a Friedrichs–Keller family with ``diagonal``)."""
+    family, params = check_mesh_spec(spec)
+    if family == FRIEDRICHS_KELLER:
+        params["diagonal"] = diagonal
+    return build_mesh(family, N, **params)
 
 
 def describe_mesh(mesh: MeshTri, points: Sequence[tuple[float, float]] = ()) -> dict[str, Any]:

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from signorini.fem.mesh import friedrichs_keller, mesh_width
-from signorini.fem.mesh_families import FRIEDRICHS_KELLER, build_mesh, check_mesh_spec, mesh_size, paper_mesh
+from signorini.fem.mesh_families import check_mesh_spec, mesh_from_spec, mesh_size, paper_mesh
 from signorini.fem.problem import ExactProblem, make_problem
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz, npz_provenance
 from signorini.pipeline.integrity import table_defect
@@ -76,12 +76,7 @@ class SceneMesh:
 
     def build_mesh(self) -> MeshTri:
         """The mesh built from its definition (what the ``mesh`` stage writes)."""
-        if self.paper_mesh:
-            return friedrichs_keller(self.N, self.diagonal)
-        family, params = check_mesh_spec(self.mesh_spec)
-        if family == FRIEDRICHS_KELLER:
-            params["diagonal"] = self.diagonal
-        return build_mesh(family, self.N, **params)
+        return mesh_from_spec(self.N, self.mesh_spec, self.diagonal)
 
     @cached_property
     def _family_mesh(self) -> tuple[MeshTri, float]:

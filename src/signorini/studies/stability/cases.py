@@ -79,7 +79,7 @@ def build_case(case: Case):
     from signorini.fem.assembly import assemble, p1_basis, system_matrix
     from signorini.fem.discrete import DiscreteProblem
     from signorini.fem.mesh import boundary_nodes, friedrichs_keller
-    from signorini.fem.mesh_families import FRIEDRICHS_KELLER, build_mesh, check_mesh_spec
+    from signorini.fem.mesh_families import mesh_from_spec
     from signorini.fem.problem import make_problem
 
     params = dict(case.problem)
@@ -87,10 +87,8 @@ def build_case(case: Case):
         params["A"] = math.nan
     problem = make_problem(params)
     if case.mesh:
-        family, mesh_params = check_mesh_spec(case.mesh)
-        extra = {"diagonal": case.diagonal} if family == FRIEDRICHS_KELLER else {}
-        mesh = build_mesh(family, case.N, **mesh_params, **extra)
-    else:
+        mesh = mesh_from_spec(case.N, case.mesh, case.diagonal)
+    else:  # the paper's mesh, jittered by the case
         mesh = friedrichs_keller(case.N, case.diagonal, case.jitter, case.seed)
     A, b = assemble(mesh, problem)
     B = boundary_nodes(mesh)
