@@ -196,7 +196,20 @@ def make_snes(PETSc, A, b, lb, ub):
     snes.setJacobian(jacobian, A, A)
     snes.setVariableBounds(lb, ub)
     snes.setFromOptions()
+    if snes.getKSP().getPC().getType() == "gamg":
+        snes.setUpdate(rebuild_gamg)
     return snes
+
+
+def rebuild_gamg(snes, iteration: int) -> None:
+    """Before each Newton step, a GAMG preconditioner built anew: the reduced-space method hands
+    the KSP an operator of another size whenever the active set changes, and PETSc's reset of the
+    KSP then keeps GAMG's multigrid levels of the old size (PETSc error 60, nonconforming sizes);
+    changing the PC's type away and back discards them, and the options set it up again."""
+    pc = snes.getKSP().getPC()
+    pc.setType("none")
+    pc.setType("gamg")
+    pc.setFromOptions()
 
 
 def make_tao(PETSc, A, b, lb, ub):
