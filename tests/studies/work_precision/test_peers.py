@@ -130,6 +130,7 @@ EXPECTED = {
     "petsc_rsls_cholmod": "ok",
     "petsc_rsls_mumps": "ok",
     "petsc_rsls_boomeramg": "ok",
+    "petsc_rsls_boomeramg_ew": "ok",
     "petsc_rsls_gamg": "ok",  # GAMG rebuilt before each step (the reduced space changes size)
     "petsc_ssls": "failed",  # DIVERGED_LINE_SEARCH
     "petsc_tron_boomeramg": "ok",
