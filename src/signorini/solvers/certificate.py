@@ -49,7 +49,12 @@ class KKTError(RuntimeError):
 
 
 class NotConvergedError(RuntimeError):
-    """A solver stopped before convergence (iteration limit, solver status)."""
+    """A solver stopped before convergence (iteration limit, solver status); ``status``: the
+    solver's own status where it reported one (cvxpy's, e.g. ``user_limit``), else None."""
+
+    def __init__(self, message: str, status: str | None = None):
+        super().__init__(message)
+        self.status = status
 
 
 class BadInputError(ValueError):

@@ -151,7 +151,7 @@ def cvxpy_solve(
         raise NotConvergedError(f"cvxpy/{solver} failed: {err}") from err
     wall = time.perf_counter() - t0
     if prob.status != cp.OPTIMAL or u.value is None:
-        raise NotConvergedError(f"cvxpy/{solver} returned status {prob.status!r}")
+        raise NotConvergedError(f"cvxpy/{solver} returned status {prob.status!r}", status=str(prob.status))
     x = (beta / alpha) * np.asarray(u.value, dtype=float)
     lam = beta * np.asarray(bound.dual_value, dtype=float).ravel()
     stats = prob.solver_stats

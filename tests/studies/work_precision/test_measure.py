@@ -110,16 +110,16 @@ def test_skip_reason_from_the_previous_mesh():
 
 
 def test_classify_failure():
-    assert wp.classify_failure(NotConvergedError("cvxpy/OSQP returned status 'user_limit'"), 119.0, 120.0) == (
-        "failed",
-        "time limit (120 s)",
-    )
-    assert wp.classify_failure(NotConvergedError("cvxpy/OSQP returned status 'user_limit'"), 1.0, 120.0)[1] == (
-        "iteration limit (status user_limit)"
-    )
-    status, reason = wp.classify_failure(NotConvergedError("cvxpy/SCS returned status 'optimal_inaccurate'"), 1, None)
+    limit = NotConvergedError("cvxpy/OSQP returned status 'user_limit'", status="user_limit")
+    assert wp.classify_failure(limit, 119.0, 120.0) == ("failed", "time limit (120 s)")
+    assert wp.classify_failure(limit, 1.0, 120.0)[1] == "iteration limit (status user_limit)"
+    status, reason = wp.classify_failure(NotConvergedError("x", status="optimal_inaccurate"), 1, None)
     assert status == "inaccurate" and "optimal_inaccurate" in reason
     assert wp.classify_failure(ValueError("boom"), 0.1, None) == ("failed", "ValueError: boom")
+    # the status is read from the error, not from its message
+    unlabelled = NotConvergedError("returned status 'user_limit'")
+    assert wp.classify_failure(unlabelled, 1.0, None)[1].startswith("NotConvergedError")
+    assert wp.classify_failure(NotConvergedError("", status="infeasible"), 1.0, None)[1] == "solver status infeasible"
 
 
 # --- the measurement ------------------------------------------------------------------------
@@ -212,7 +212,7 @@ def test_failing_solver_is_recorded_not_raised(small_study, monkeypatch):
     assert recs[0]["alg_L4"] > 0 and recs[0]["iterations"] == 7
 
     def raising(*args, **kwargs):
-        raise NotConvergedError("cvxpy/OSQP returned status 'infeasible'")
+        raise NotConvergedError("cvxpy/OSQP returned status 'infeasible'", status="infeasible")
 
     monkeypatch.setattr(signorini.solvers, "cvxpy_solve", raising)
     recs = measure(small_study, {"solver": "cvxpy_osqp"}, out="raising.json")

@@ -180,3 +180,34 @@ def test_the_template_holds_the_sections_the_report_fills_and_no_others(tmp_path
     template = tmp_path / "t.tmpl"
     template.write_text("comment {x}\n@@ one\nA {x} \\\nB {{y}}\nC\n\n@@ two\nD\n", encoding="utf-8")
     assert report._sections(template) == {"one": "A {x} B {{y}}\nC", "two": "D"}
+
+
+def _peer_runs(run_row, complementarity: float) -> list[Run]:
+    """A TAO peer whose runs PETSc calls converged with the given complementarity residual, and one
+    it stopped at its iteration limit with an answer the certificate accepts."""
+    kkt = {"kkt_stationarity": 1e-3, "kkt_primal": 0.0, "kkt_dual": 0.0, "kkt_required": 1e-8}
+    rows = [
+        run_row(N, "bqpip", "1e-08", [1.0], status="inaccurate", label="BQPIP", solver="petsc_tao",
+                converged_reason="CONVERGED_GTTOL", kkt_complementarity=complementarity * N / 40,
+                kkt_worst=max(complementarity * N / 40, 1e-3), **kkt)
+        for N in (10, 20, 40)
+    ]
+    limit = {**kkt, "kkt_stationarity": 5e-15, "kkt_complementarity": 0.0, "kkt_worst": 5e-15}
+    rows.append(run_row(10, "bqpip", "1e-10", [1.0], status="failed", label="BQPIP", solver="petsc_tao",
+                        converged_reason="DIVERGED_MAXITS", **limit))
+    return rows
+
+
+def test_petscs_stopping_test_is_set_against_the_certificate(measurements, run_row):
+    """The section counts, per peer, the runs PETSc called converged that the certificate rejects
+    (and which residual), and those stopped at a limit that it accepts; a residual of 0.1 or more is
+    named far from the KKT point, a small one is not."""
+    md = _md(measurements + _peer_runs(run_row, 0.8))
+    (row,) = _table(md, "PETSc's stopping test against the certificate")
+    assert row == ["BQPIP", "3 (CONVERGED_GTTOL): complementarity 2.0e-01–8.0e-01",
+                   "1 (DIVERGED_MAXITS): at most 5.0e-15"]
+    assert "Far from the KKT point: BQPIP, 3 runs (CONVERGED_GTTOL) with complementarity 0.20–0.80" in md
+    near = _md(measurements + _peer_runs(run_row, 1e-5))  # converged near a tolerance: not far
+    assert "stationarity 1.0e-03–1.0e-03" in _table(near, "PETSc's stopping test against the certificate")[0][1]
+    assert "No configuration reported convergence with a residual above 0.1" in near
+    assert "stopping test against" not in _md(measurements)  # no peer: no section

@@ -228,6 +228,34 @@ def _peers(runs: Sequence[Run]) -> dict[str, dict]:
     return out
 
 
+RESIDUALS = ("stationarity", "primal", "dual", "complementarity")  # the certificate's, as the CSV names them
+
+
+def _stop_disagreements(runs: Sequence[Run]) -> list[dict]:
+    """Per peer configuration, the runs where PETSc's own stopping test and our certificate disagree:
+    ``converged`` — PETSc reported convergence (its reasons), the certificate rejects the answer,
+    with the range of the largest residual and which residual it was in most of them; ``accepted``
+    — PETSc stopped at a limit (``failed``), the certificate accepts the answer at the run's
+    tolerance (its largest residual)."""
+    out = []
+    for config in dict.fromkeys(r.config for r in runs if r.kind is Kind.PEER):
+        mine = [r for r in runs if r.config == config and math.isfinite(r.kkt_worst)]
+        rejected = [r for r in mine if r.status == "inaccurate" and r.converged_reason.startswith("CONVERGED")]
+        accepted = [r for r in mine if r.status == "failed" and r.kkt_worst <= r.kkt_required]
+        if not (rejected or accepted):
+            continue
+        worst = Counter(max(RESIDUALS, key=lambda k: getattr(r, f"kkt_{k}")) for r in rejected)
+        entry = {"config": config, "label": mine[0].label, "converged": len(rejected), "accepted": len(accepted)}
+        if rejected:
+            entry |= {"reasons": sorted({r.converged_reason for r in rejected}), "largest": worst.most_common(1)[0][0],
+                      "lo": min(r.kkt_worst for r in rejected), "hi": max(r.kkt_worst for r in rejected)}
+        if accepted:
+            entry |= {"limits": sorted({r.converged_reason for r in accepted}),
+                      "accepted_worst": max(r.kkt_worst for r in accepted)}
+        out.append(entry)
+    return out
+
+
 def _numbers(runs: Sequence[Run], name: str) -> np.ndarray:
     """A field of the runs as floats (a flag as 0/1; missing: NaN)."""
     return np.array([NAN if (v := getattr(r, name)) is None else float(v) for r in runs], dtype=float)
@@ -317,16 +345,11 @@ def _machine(runs: Sequence[Run]) -> dict[str, Any]:
     ran at once, status counts."""
     load = _numbers([r for r in runs if r.status != "skipped"], "load1")
     load = load[np.isfinite(load)]
-    jobs: dict[tuple[int, str], Run] = {}
-    for r in runs:
-        jobs.setdefault((r.N, r.config), r)
-    started = _numbers(list(jobs.values()), "job_started")
-    wall = _numbers(list(jobs.values()), "job_wall_s")
+    jobs = list({(r.N, r.config): r for r in runs}.values())  # a job's runs share its start and wall time
+    started, wall = _numbers(jobs, "job_started"), _numbers(jobs, "job_wall_s")
     ends = started + wall
     return {
-        "load": {"min": float(np.min(load)), "median": float(np.median(load)), "max": float(np.max(load))}
-        if load.size
-        else {},
+        "load": dict(min=float(load.min()), median=float(np.median(load)), max=float(load.max())) if load.size else {},
         "span_s": float(np.nanmax(ends) - np.nanmin(started)) if runs else NAN,
         "job_time_s": float(np.nansum(wall)),
         "concurrent_jobs": concurrent_jobs(started, ends),
@@ -366,6 +389,7 @@ def findings(
         "fair": _fair_race(runs, Ns, sel),
         "scaling": _scaling(Ns, sel),
         "peers": _peers(runs),
+        "stop_disagreements": _stop_disagreements(runs),
         "eoc": _l4_eocs(runs, Ns, paper_rates, paper_l4),
         "paper_l4_eoc": paper_rates,
         "exact": _exact_cost(Ns, sel),

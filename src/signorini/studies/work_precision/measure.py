@@ -1,38 +1,16 @@
-"""Work-precision study: error against run time of every solver on the paper's problem.
-
-What is measured, per mesh ``N`` and per *solver configuration* (``study_configs``):
-
-- ``time_s``: CPU time of one call of the solver on the assembled system (a PETSc peer: its
-  driver's CPU time around PETSc's ``solve``), the median of the repeats of the timing protocol
-  (``timing``): ``wall_s`` the wall time, ``time_ref`` the time in reference units (against
-  a sparse reference kernel timed before and after every call), ``cpu_share`` CPU over wall,
-  ``spread``, ``time_runs``, ``rejected``, ``loaded``, ``load1`` (1-minute load average);
-  ``machine`` (``timing.machine_record``, JSON): the cores, the CPU model, the virtualisation, the thread
-  settings and the software versions of the job that measured it.
-  For the active-set solver the call is ``solve_discrete`` (a cascade warm start includes
-  building and solving the coarse levels); for cvxpy it is ``cvxpy_solve`` (cvxpy's
-  canonicalisation included; the QP solver's own time is ``solver_time_s``); a peer started
-  from the cascade (``start`` = cascade) has the start's cost (``start_s``, computed once per
-  job) added.  Assembly of the level-``N`` system is common to all configurations and timed
-  once (``build_s``, the ``discretise`` stage).
-- ``iterations`` (Newton steps of the active-set method, iterations of the QP solver) and
-  the relative KKT residuals of ``signorini.solvers.certificate`` (computed with the check
-  disabled, so an inaccurate answer is recorded, not raised).
-- ``status``: ``ok`` (optimal, worst KKT residual ≤ the requested tolerance), ``inaccurate``
-  (residual above it, or the solver's own status ``optimal_inaccurate``), ``failed`` (with
-  the reason: solver error, time limit, iteration limit, …) or ``skipped`` (predicted to
-  fail or to exceed the time limit from the same configuration on the previous mesh).
-  A failure never raises: the exception is recorded.
-- ``alg_<norm>``: the *algebraic error* ``‖u_h^solver − u_h^exact‖`` against the certified
-  exact discrete solution of the source scene, in exact norms of a P1 function (``p1_norms``).
-- ``total_<norm>``: the *total error* ``‖u − u_h^solver‖`` with the pipeline's conventions
-  (``signorini.fem.norms.conventional.evaluate_norms``), and ``disc_<norm>``: the discretisation error
-  ``‖u − u_h^exact‖`` read from the source scene's norm artifacts.
-
-The study reuses the source scene's assembled systems, exact solutions and norm artifacts
-(``results/<source>/N<N>/system.npz``, ``solution.npz``, ``norms/*.json``).  This module is the
-stage ``work_precision_measure``; ``table`` gathers the records into ``work_precision.csv``,
-``findings`` and ``report`` turn it into ``work_precision.md``, ``figures`` into the figures.
+"""Stage ``work_precision_measure``: one solver configuration (``study.SolverConfig``) on one mesh of
+the source scene, at its default tolerance and at every swept one, timed under the timing protocol
+(``signorini.timing``: CPU seconds per call, the median of its samples; for the exact routes the call
+is ``solve_discrete`` with the cascade's coarse levels, for cvxpy ``cvxpy_solve`` with its
+canonicalisation, for a PETSc peer its driver's ``solve`` plus, from the cascade start, the start's
+cost).  Each answer is judged by the KKT certificate with the check disabled (an inaccurate answer is
+recorded, not raised) and its algebraic error (exact norms of a P1 function) and total error (the
+pipeline's conventions) are evaluated; a failure never raises, it is recorded with its reason, and a
+run predicted to fail or to exceed the time limit from the previous mesh is skipped.  The records
+are the rows of ``work_precision.csv`` (``table.Run``); what each column holds is described once, in
+docs/work-precision.md (*Routes, kinds and the record of a run*; *The timing protocol*).
+``table`` gathers the records, ``findings`` and ``report`` turn them into ``work_precision.md``,
+``figures`` into the figures.
 """
 
 from __future__ import annotations
@@ -81,18 +59,17 @@ def _log_reason(path: Path) -> str:
 
 
 def classify_failure(err: BaseException, elapsed: float, time_limit_s: float | None) -> tuple[str, str]:
-    """(status, reason) of a solver call that raised ``err`` after ``elapsed`` seconds."""
-    message = " ".join(str(err).split())
-    status = re.search(r"returned status '(\w+)'", message)
-    if status and status[1] == "optimal_inaccurate":
+    """(status, reason) of a solver call that raised ``err`` after ``elapsed`` seconds (``err.status``:
+    the solver's own status, ``solvers.NotConvergedError``)."""
+    status = getattr(err, "status", None)
+    if status == "optimal_inaccurate":
         return "inaccurate", "solver status optimal_inaccurate (cvxpy_solve returns no solution for it)"
     if time_limit_s is not None and elapsed >= 0.9 * time_limit_s:
         return "failed", f"time limit ({time_limit_s:g} s)"
-    if status and status[1] == "user_limit":
+    if status == "user_limit":
         return "failed", "iteration limit (status user_limit)"
-    if status:
-        return "failed", f"solver status {status[1]}"
-    return "failed", f"{type(err).__name__}: {message[:240]}"
+    message = " ".join(str(err).split())
+    return "failed", f"solver status {status}" if status else f"{type(err).__name__}: {message[:240]}"
 
 
 def timed_call(

@@ -325,6 +325,28 @@ def _cost_table(found: Mapping) -> list[str]:
     return _table("cost_table", header, rows, label=exact["label"])
 
 
+FAR = 0.1  # a residual at least this large (relative) is far from the KKT point, not near a tolerance
+
+
+def _stops_table(found: Mapping) -> list[str]:
+    """PETSc's stopping test against the certificate (``findings._stop_disagreements``); the runs
+    PETSc called converged with a residual of at least ``FAR`` named in a sentence."""
+    rows, far = [], [e for e in found["stop_disagreements"] if e["converged"] and e["lo"] >= FAR]
+    for e in found["stop_disagreements"]:
+        conv = (f"{e['converged']} ({', '.join(e['reasons'])}): {e['largest']} {fmt_rel(e['lo'])}–{fmt_rel(e['hi'])}"
+                if e["converged"] else "—")
+        acc = (f"{e['accepted']} ({', '.join(e['limits'])}): at most {fmt_rel(e['accepted_worst'])}"
+               if e["accepted"] else "—")
+        rows.append([e["label"], conv, acc])
+    if not rows:
+        return []
+    items = "; ".join(f"{e['label']}, {e['converged']} runs ({', '.join(e['reasons'])}) with {e['largest']} "
+                      f"{e['lo']:.2f}–{e['hi']:.2f}" for e in far)
+    summary = prose("stops_far", items=items) if far else prose("stops_near")
+    header = ["PETSc method", "converged, rejected: runs (reasons): largest residual", "stopped, accepted: runs"]
+    return _table("stops", header, rows, "l", summary=summary)
+
+
 def _failure_rows(bad: Sequence[Run]) -> list[list[str]]:
     """Failed, inaccurate and skipped runs grouped by (solver, status, reason)."""
     groups: dict[tuple[str, str, str], list[tuple[int, str]]] = {}
@@ -364,7 +386,7 @@ def work_precision_md(
     lines = [prose("header"), "", *_setup(runs, found, source, protocol or Protocol()), *_rules(runs, found)]
     lines += ["", prose("findings"), "", *_brief(found, labels)]
     lines += _table1_digits(found) + _time_to_digits(found, labels) + _fair_table(found, labels)
-    lines += _peer_table(found) + _eoc_table(found) + _cost_table(found) + _failures(runs)
+    lines += _peer_table(found) + _stops_table(found) + _eoc_table(found) + _cost_table(found) + _failures(runs)
     return re.sub(r"\n{3,}", "\n\n", "\n".join(lines)).rstrip() + "\n"
 
 

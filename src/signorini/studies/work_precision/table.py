@@ -20,7 +20,7 @@ ERRORS = ("alg", "total", "disc")  # the errors by norm: columns alg_<norm>, tot
 @dataclass(frozen=True)
 class Run:
     """One row of ``work_precision.csv``: one configuration at one tolerance on one mesh, as
-    ``measure`` records it (its module docstring says what the fields mean).  A field the run did
+    ``measure`` records it (docs/work-precision.md says what each column holds).  A field the run did
     not record is NaN (a number), None (a count or a flag) or "" (a text); ``alg``, ``total`` and
     ``disc`` are the algebraic, total and discretisation errors by norm."""
 
