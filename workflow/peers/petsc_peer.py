@@ -205,7 +205,9 @@ def rebuild_gamg(snes, iteration: int) -> None:
     """Before each Newton step, a GAMG preconditioner built anew: the reduced-space method hands
     the KSP an operator of another size whenever the active set changes, and PETSc's reset of the
     KSP then keeps GAMG's multigrid levels of the old size (PETSc error 60, nonconforming sizes);
-    changing the PC's type away and back discards them, and the options set it up again."""
+    changing the PC's type away and back discards them, and the options set it up again.  A step
+    whose active set repeats the previous one also builds anew, where PETSc would have kept GAMG's
+    interpolation: a set-up per Newton step, as BoomerAMG pays for every new operator anyway."""
     pc = snes.getKSP().getPC()
     pc.setType("none")
     pc.setType("gamg")

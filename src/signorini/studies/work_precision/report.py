@@ -342,7 +342,7 @@ def _stops_table(found: Mapping) -> list[str]:
         return []
     items = "; ".join(f"{e['label']}, {e['converged']} runs ({', '.join(e['reasons'])}) with {e['largest']} "
                       f"{e['lo']:.2f}–{e['hi']:.2f}" for e in far)
-    summary = prose("stops_far", items=items) if far else prose("stops_near")
+    summary = prose("stops_far", items=items, far=FAR) if far else prose("stops_near", far=FAR)
     header = ["PETSc method", "converged, rejected: runs (reasons): largest residual", "stopped, accepted: runs"]
     return _table("stops", header, rows, "l", summary=summary)
 
