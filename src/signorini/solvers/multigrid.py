@@ -72,6 +72,7 @@ import scipy.sparse as sp
 
 from signorini.solvers import certificate
 from signorini.solvers.certificate import KKTError, NotConvergedError, abs_product
+from signorini.solvers.local import concatenated_ranges, settle_release
 from signorini.solvers.pdas import StepCallback, certified_result, clamped_values, initial_active, iterate, prepare_qp
 from signorini.solvers.result import SolveResult
 
@@ -222,18 +223,11 @@ def hierarchy(A: sp.csr_matrix, kind: str = "geometric", max_coarse: int = 500, 
     return solver
 
 
-def _ranges(starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
-    """The concatenated ranges ``starts[k]:ends[k]`` (positions of CSR rows)."""
-    lengths = ends - starts
-    offsets = np.repeat(starts - np.concatenate([[0], np.cumsum(lengths)[:-1]]), lengths)
-    return np.arange(int(lengths.sum())) + offsets
-
-
 def _positions(M: sp.csr_matrix, rows: np.ndarray, cols: np.ndarray) -> np.ndarray | None:
     """The positions in ``M.data`` of the entries ``(rows, cols)`` (``M`` with sorted indices),
     or None when one of them is not stored."""
     lines = np.unique(rows)
-    pos = _ranges(M.indptr[lines], M.indptr[lines + 1])
+    pos = concatenated_ranges(M.indptr[lines], M.indptr[lines + 1])
     keys = np.repeat(lines, np.diff(M.indptr)[lines]).astype(np.int64) * M.shape[1] + M.indices[pos]
     wanted = rows.astype(np.int64) * M.shape[1] + cols
     k = np.minimum(np.searchsorted(keys, wanted), keys.size - 1)
@@ -320,9 +314,10 @@ class GalerkinHierarchy:
         if changed.size == 0:
             return
         A, fine = self.A, self.levels[0].A
-        S = np.unique(np.concatenate([changed, A.indices[_ranges(A.indptr[changed], A.indptr[changed + 1])]]))
+        neighbours = A.indices[concatenated_ranges(A.indptr[changed], A.indptr[changed + 1])]
+        S = np.unique(np.concatenate([changed, neighbours]))
         starts, ends = A.indptr[S], A.indptr[S + 1]
-        pos, rows = _ranges(starts, ends), np.repeat(S, ends - starts)  # the stored entries of rows S
+        pos, rows = concatenated_ranges(starts, ends), np.repeat(S, ends - starts)  # the stored entries of rows S
         values = clamped_values(A, rows, free, pos)
         if self.stencil_levels[0]:
             diff = values - fine.values_at(pos, rows)
@@ -435,6 +430,8 @@ class MultigridSystems:
         self.hierarchy = GalerkinHierarchy(A, options["amg"], options["max_coarse"], options.get("grid"))
         self.amg, self.setup_s, self.update_s = options["amg"], time.perf_counter() - t0, 0.0
         self.cg_total = 0
+        self.B, self.kkt_tol = options.get("B"), options.get("kkt_tol")  # what ``settle`` needs
+        self.settles, self.settled_s = 0, 0.0
         self.products = 0  # products with the fine operator (CG's and the residual checks')
         self.work = 0.0  # fine-grid work units of the Newton steps (``GalerkinHierarchy.cycle_work``)
         self.last: dict = {}
@@ -490,6 +487,16 @@ class MultigridSystems:
     def counters(self) -> dict:
         return dict(self.last)
 
+    def settle(self, u: np.ndarray, before: np.ndarray, after: np.ndarray) -> tuple | None:
+        """``pdas.Settle``: the release from ``before`` to ``after`` settled on a patch
+        (``local.settle_release``); the next solve starts from the settled iterate."""
+        settled = settle_release(self.A, self.b, self.B, u, before, after, self.kkt_tol)
+        if settled is not None:
+            self.x = settled[0]
+            self.settled_s += settled[2]["local_s"]
+            self.settles += 1
+        return settled
+
     def info(self) -> dict:
         return {
             "amg": self.amg,
@@ -500,6 +507,8 @@ class MultigridSystems:
             "operator_complexity": self.hierarchy.operator_complexity(),
             "setup_s": self.setup_s,
             "galerkin_update_s": self.update_s,
+            "local_settles": self.settles,
+            "local_s": self.settled_s,
             "cg_iterations": self.cg_total,
             "v_cycles": self.hierarchy.cycles,
             "work_units": self.work,
@@ -552,6 +561,7 @@ def multigrid_solve(
     inner_rtol: float = 1e-8,
     max_cg_iter: int = 500,
     max_coarse: int = 500,
+    local_release: bool = True,
     *,
     callback: StepCallback | None = None,
     grid: Grid | None = None,
@@ -566,7 +576,8 @@ def multigrid_solve(
     ``smoothed_aggregation``; ``tol``: the energy-relative accuracy of the final solves;
     ``inner_rtol``: of the solves while the set moves; ``max_cg_iter``: per solve;
     ``max_coarse``: unknowns of the coarsest level (a dense Cholesky factorisation; a smaller
-    system is solved by it alone); ``grid``: the grid of a geometric hierarchy, where ``A``'s
+    system is solved by it alone); ``local_release``: settle a Newton step that only releases
+    nodes on a patch around them (``solvers.local``); ``grid``: the grid of a geometric hierarchy, where ``A``'s
     own is not uniform (the coarse problems of ``nested_start``).  ``callback(row)`` receives
     each Newton step's row of ``SolveResult.history`` (iteration, active nodes, changes, the
     step's CG iterations and final energy residual, whether it was an accurate solve, elapsed
@@ -580,23 +591,25 @@ def multigrid_solve(
         raise ValueError(f"need 0 < tol <= inner_rtol, got tol={tol}, inner_rtol={inner_rtol}")
     A, b, B = prepare_qp(A, b, constrained)
     shared = dict(amg=amg, tol=tol, inner_rtol=inner_rtol, max_cg_iter=max_cg_iter, max_coarse=max_coarse)
-    systems = MultigridSystems(A, b, np.zeros_like(b), shared | {"grid": grid})
+    systems = MultigridSystems(A, b, np.zeros_like(b), shared | {"grid": grid, "B": B, "kkt_tol": kkt_tol})
+    settle = systems.settle if local_release else None
     nested = None
     if warm_start is None:
         iteration = dict(max_iter=max_iter, kkt_tol=kkt_tol, frontier_growth=frontier_growth)
+        iteration |= {"local_release": local_release}
         warm_start = nested = nested_start(systems.hierarchy, b, B, shared | iteration)
     active = initial_active(A, b, B, warm_start, warm_start_dilation)
     if warm_start is not None:
         systems.x = np.asarray(warm_start, dtype=float)
     try:
-        u, active, history = iterate(systems, A, b, B, active, max_iter, frontier_growth, callback, log)
+        u, active, history = iterate(systems, A, b, B, active, max_iter, frontier_growth, callback, log, settle)
     except NotConvergedError as err:
         if nested is None:
             raise
         log.warning("the nested start did not settle (%s); solving from the plain cold start", err)
         systems.x = np.zeros_like(b)
         active = initial_active(A, b, B, None)
-        u, active, history = iterate(systems, A, b, B, active, max_iter, frontier_growth, callback, log)
+        u, active, history = iterate(systems, A, b, B, active, max_iter, frontier_growth, callback, log, settle)
     info = systems.info() | {"nested_start": nested is not None}
     result = certified_result(A, b, B, u, active, kkt_tol, t0, "multigrid", info, history)
     result.hierarchy = systems.hierarchy  # Galerkin for the final set: the estimate reuses it

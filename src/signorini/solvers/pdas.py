@@ -27,6 +27,9 @@ from signorini.solvers.certificate import KKTError, NotConvergedError, check_qp_
 from signorini.solvers.result import SolveResult
 
 StepCallback = Callable[[dict], None]
+# settles a release: (u, the set before the step, the set after it) -> (u, set, row of counters) | None
+Settle = Callable[[np.ndarray, np.ndarray, np.ndarray], "tuple[np.ndarray, np.ndarray, dict] | None"]
+MAX_SETTLES = 8  # releases settled locally per solve, at most (each costs a small exact solve)
 CREEP_STEPS = 3  # frontier steps of one node per end before the frontier's reach starts doubling
 
 
@@ -174,21 +177,33 @@ def iterate(
     frontier_growth: bool,
     callback: StepCallback | None,
     log: logging.Logger,
+    settle: Settle | None = None,
 ) -> tuple[np.ndarray, np.ndarray, list[dict]]:
     """Newton steps from the mask ``active`` until the set repeats on an accurate solve:
     ``(u, active, history)``.  Inexact solves while the set moves; a set that repeats on one is
     solved again accurately, and a change found then goes on inexactly.  A cycle of sets switches
     to accurate solves for good; a cycle of accurate ones, or ``max_iter`` steps, raises
-    ``NotConvergedError``."""
+    ``NotConvergedError``.  With ``settle``, an inexact step that only releases nodes is handed to
+    it (at most ``MAX_SETTLES`` times), and the iteration goes on from the set and iterate it
+    returns (``solvers.local``); the final test is the same."""
     t0 = time.perf_counter()
     frontier = Frontier(boundary_adjacency(A, B)) if frontier_growth else None
     seen: set[bytes] = set()
     history: list[dict] = []
     accurate = always = systems.exact
+    settles = 0
     for it in range(1, max_iter + 1):
         u = systems(free_mask(b.size, B, active), accurate)
         new_active = next_active(A, b, B, u, active, frontier)
         counters = systems.counters()
+        changes = int(np.count_nonzero(new_active != active))
+        releases_only = changes > 0 and not (new_active & ~active).any()
+        if settle is not None and not accurate and releases_only and settles < MAX_SETTLES:
+            settled = settle(u, active, new_active)
+            if settled is not None:
+                u, new_active, local = settled
+                counters |= local
+                settles += 1
         row = {
             "iteration": it,
             "active": int(active.sum()),

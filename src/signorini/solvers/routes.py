@@ -81,6 +81,7 @@ MULTIGRID = Route(
         "inner_rtol": Option(float, default=1e-8),
         "max_cg_iter": Option(int, default=500),
         "max_coarse": Option(int, default=500),
+        "local_release": Option(bool, default=True),
     },
 )
 CVXPY = Route(
