@@ -90,9 +90,10 @@ def settle_release(
 ) -> tuple[np.ndarray, np.ndarray, dict] | None:
     """The iterate ``u`` (solved with the contact set ``before``) and the contact set ``active``
     a Newton step shrank it to (masks over ``B``) settled on the patch around the released nodes:
-    ``(u, active, row)``, ``row`` the patch's unknowns, its Newton steps, the nodes it changed and
-    its seconds.  None when nothing was released, the patch is not local
-    (``PATCH_MAX_FRACTION``) or its solve fails."""
+    ``(u, active, row)``, ``u`` changed in place on the patch (a copy would be n numbers), ``row``
+    the patch's unknowns, its Newton steps, the nodes it changed and its seconds.  None (``u``
+    unchanged) when nothing was released, the patch is not local (``PATCH_MAX_FRACTION``) or its
+    solve fails."""
     from signorini.solvers.active_set import active_set_solve
 
     t0 = time.perf_counter()
@@ -116,8 +117,7 @@ def settle_release(
         result = active_set_solve(matrix, load, local_B, warm_start=start, kkt_tol=kkt_tol)
     except (NotConvergedError, KKTError):
         return None
-    settled_u = u.copy()
-    settled_u[patch] = result.u
+    u[patch] = result.u
     in_contact = np.zeros(patch.size, dtype=bool)
     in_contact[result.active] = True
     settled = active.copy()
@@ -128,4 +128,4 @@ def settle_release(
         "local_changes": int(np.count_nonzero(settled != active)),
         "local_s": time.perf_counter() - t0,
     }
-    return settled_u, settled, row
+    return u, settled, row

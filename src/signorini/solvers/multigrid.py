@@ -35,6 +35,13 @@ where the direct route factorises (fill-in; time growing like n^1.5).  What make
   sets on the paper's problem from coarse to fine meshes and on stiff, large-amplitude, off-centre
   and cold-started cases, with fewer CG iterations
   (docs/evidence/design-measurements.md#multigrid-inner-tolerance).
+- **Releases settled on a patch.**  From the cascade's start the contact set is too large at the
+  end of the contact zone where the solution is biactive (u and λ vanish to second order there),
+  and each Newton step releases about half of the excess: log₂ of it in steps of a few V-cycles.
+  A step that only releases nodes is instead settled by an exact obstacle solve on a patch around
+  them, the rest of the iterate held as Dirichlet data (``solvers.local``), and the iteration goes
+  on from there: the same final test, fewer steps and V-cycles
+  (docs/evidence/design-measurements.md#multigrid-local-release).
 - **Warm starts.**  Each solve starts from the previous Newton iterate, the first from the
   warm start (in the cascade of ``fem.solve`` the coarser mesh's interpolant): a step that
   changed a few nodes costs a few iterations.  Without a warm start the route makes its own

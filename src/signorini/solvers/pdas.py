@@ -9,7 +9,8 @@ accuracy.
 
 The routes differ only in how they solve the Newton systems (a ``NewtonSystems``): the direct
 route (``active_set``) with a sparse factorisation and bordered updates, the multigrid route
-(``multigrid``) with preconditioned conjugate gradients, inexact while the set moves.  Both
+(``multigrid``) with preconditioned conjugate gradients, inexact while the set moves, a step
+that only releases nodes settled on a patch around them (``solvers.local``).  Both
 report one row per Newton step (``SolveResult.history``, and ``callback`` as it happens).
 """
 
