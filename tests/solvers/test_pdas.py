@@ -138,3 +138,13 @@ def test_frontier_takes_the_full_step_when_no_violated_node_is_near():
     active[:3], grow[30:40] = True, True
     np.testing.assert_array_equal(frontier.restrict(grow, active), grow)
     assert frontier.held == 0
+
+
+def test_a_step_releases_only_when_it_drops_nodes_and_adds_none():
+    from signorini.solvers.pdas import releases_only
+
+    before = np.array([True, True, False, False])
+    assert releases_only(before, np.array([True, False, False, False]))
+    assert not releases_only(before, before)  # nothing changed
+    assert not releases_only(before, np.array([True, False, True, False]))  # one released, one added
+    assert not releases_only(before, np.array([True, True, True, False]))  # only added

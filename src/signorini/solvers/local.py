@@ -45,8 +45,8 @@ def concatenated_ranges(starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
 
 
 def neighbourhood(A: sp.csr_matrix, seeds: np.ndarray, levels: int, limit: int) -> np.ndarray | None:
-    """The nodes within ``levels`` steps of ``seeds`` in the graph of ``A`` (sorted), or None once
-    they exceed ``limit`` nodes.  Work in O(the nodes found)."""
+    """The mask of the nodes within ``levels`` steps of ``seeds`` in the graph of ``A``, or None
+    once they exceed ``limit`` nodes.  Work in O(the nodes found), besides the mask."""
     inside = np.zeros(A.shape[0], dtype=bool)
     inside[seeds] = True
     front, count = np.asarray(seeds), len(seeds)
@@ -59,7 +59,7 @@ def neighbourhood(A: sp.csr_matrix, seeds: np.ndarray, levels: int, limit: int) 
         count += front.size
         if count > limit:
             return None
-    return np.flatnonzero(inside)
+    return inside
 
 
 def patch_problem(
@@ -101,11 +101,10 @@ def settle_release(
     if released.size == 0:
         return None
     levels = max(PATCH_MIN_LEVELS, PATCH_REACH * released.size)
-    patch = neighbourhood(A, released, levels, int(PATCH_MAX_FRACTION * A.shape[0]))
-    if patch is None:
+    inside = neighbourhood(A, released, levels, int(PATCH_MAX_FRACTION * A.shape[0]))
+    if inside is None:
         return None
-    inside = np.zeros(A.shape[0], dtype=bool)
-    inside[patch] = True
+    patch = np.flatnonzero(inside)
     matrix, load = patch_problem(A, b, u, patch, inside)
     at = np.flatnonzero(inside[B])  # the constrained nodes in the patch: positions in B …
     local_B = np.searchsorted(patch, B[at])  # … and in the patch

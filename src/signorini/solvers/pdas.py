@@ -161,6 +161,11 @@ def next_active(
     return keep | grow
 
 
+def releases_only(before: np.ndarray, after: np.ndarray) -> bool:
+    """Whether the step from the contact set ``before`` to ``after`` (masks) releases nodes and adds none."""
+    return bool((before & ~after).any() and not (after & ~before).any())
+
+
 def free_mask(n: int, B: np.ndarray, active: np.ndarray) -> np.ndarray:
     """The free set F of the active set ``active`` (a mask over ``B``), as a mask over all nodes."""
     free = np.ones(n, dtype=bool)
@@ -197,9 +202,7 @@ def iterate(
         u = systems(free_mask(b.size, B, active), accurate)
         new_active = next_active(A, b, B, u, active, frontier)
         counters = systems.counters()
-        changes = int(np.count_nonzero(new_active != active))
-        releases_only = changes > 0 and not (new_active & ~active).any()
-        if settle is not None and not accurate and releases_only and settles < MAX_SETTLES:
+        if settle is not None and not accurate and settles < MAX_SETTLES and releases_only(active, new_active):
             settled = settle(u, active, new_active)
             if settled is not None:
                 u, new_active, local = settled
