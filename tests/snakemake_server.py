@@ -8,10 +8,13 @@ the working directory, with exactly that environment and ``sys.argv``, in a sess
 child's pid, then with its exit code.
 
 A child is a fresh process in all that a test observes (working directory, environment,
-arguments, signals, output); it differs from ``snakemake ...`` in a shell only in having the
-modules of ``snakemake.cli`` loaded before it starts, which the command loads first anyway.
-Nothing of the repository (``signorini``, numpy) is imported before the fork: each child imports
-the package from the copy under test, as the Snakefile says.
+arguments, signals, output); it differs from ``snakemake ...`` in a shell only in having Snakemake's
+own modules loaded before it starts: those of ``snakemake.cli``, which the command loads first
+anyway, and ``PRELOADED``, the third-party modules every planning call loads on its way (the
+report plugins' registry, the source cache's transports, the notebook reader).  Nothing of the
+repository (``signorini``) is imported before the fork: each child imports the package from the copy
+under test, as the Snakefile says.  (numpy is: ``snakemake.cli`` loads it through its scheduler's LP
+solver, in the command too.)
 
 ``Server`` is the client: one server per process that asks (a pytest worker), started on first use.
 """
@@ -50,10 +53,43 @@ def _child(request: dict) -> None:
     sys.exit(0)
 
 
+# loaded by every call that plans a DAG (``snakemake -n`` of any target), after ``snakemake.cli``:
+# about half of what a dry run's process costs on top of its DAG when each child loaded them again
+PRELOADED = (
+    "snakemake.api",
+    "snakemake.dag",
+    "snakemake.report",
+    "snakemake_interface_report_plugins.registry",
+    "snakemake_interface_executor_plugins.registry",
+    "smart_open",
+    "requests",
+    "nbformat",
+)
+
+
+def preload() -> None:
+    """Import ``snakemake.cli`` and ``PRELOADED``, and collect the report and executor plugins (what
+    the first call in every child would do); a module that is not installed is left to the child."""
+    import importlib
+
+    import snakemake.cli  # noqa: F401 -- the import every call would otherwise pay
+
+    for name in PRELOADED:
+        try:
+            importlib.import_module(name)
+        except ImportError:
+            continue
+    from snakemake_interface_executor_plugins.registry import ExecutorPluginRegistry
+    from snakemake_interface_report_plugins.registry import ReportPluginRegistry
+
+    ReportPluginRegistry()
+    ExecutorPluginRegistry()
+
+
 def serve() -> None:
     """The server's loop: a request per line of stdin, ``{"pid": ...}`` and ``{"rc": ...}`` on stdout."""
     sys.dont_write_bytecode = True
-    import snakemake.cli  # noqa: F401 -- the import every call would otherwise pay
+    preload()
 
     for line in sys.stdin:
         request = json.loads(line)

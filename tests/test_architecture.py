@@ -6,6 +6,7 @@ module of ``src/`` has its test module where docs/architecture.md says)."""
 from __future__ import annotations
 
 import ast
+import functools
 import io
 import re
 import tokenize
@@ -536,10 +537,16 @@ def _declared() -> tuple[set[str], set[str]]:
     return names(project["dependencies"]), names(extras)
 
 
-def _distribution(module: str) -> str:
+@functools.cache
+def _packages_distributions() -> dict[str, list[str]]:
+    """{top-level module: its distributions}: one scan of the installed distributions' records."""
     from importlib.metadata import packages_distributions
 
-    dists = packages_distributions().get(module) or [module]  # not installed (an optional extra): its own name
+    return packages_distributions()
+
+
+def _distribution(module: str) -> str:
+    dists = _packages_distributions().get(module) or [module]  # not installed (an optional extra): its own name
     return dists[0].lower().replace("_", "-")
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import subprocess
+import sys
 import time
 
 import pytest
@@ -44,3 +45,17 @@ def test_a_call_past_its_timeout_is_killed_and_the_server_goes_on(server, tmp_pa
     assert time.monotonic() - start < 30
     (tmp_path / "Snakefile").write_text('rule a:\n    output: "b"\n    shell: "touch {output}"\n', encoding="utf-8")
     assert server.run(SNAKEMAKE, ["-c1", "b"], tmp_path, dict(os.environ), timeout=120).returncode == 0
+
+
+def test_the_preload_loads_nothing_of_the_repository():
+    """What the server loads before forking is Snakemake's: each child imports the package from the
+    copy under test (and nothing numerical beyond what ``snakemake.cli`` loads itself)."""
+    code = (
+        "import sys; import snakemake.cli; before = set(sys.modules); from snakemake_server import preload; "
+        "preload(); print(sorted(m for m in set(sys.modules) - before if m.split('.')[0] in ('signorini', 'numpy', "
+        "'scipy', 'pandas')))"
+    )
+    here = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    proc = subprocess.run([sys.executable, "-c", code], cwd=here, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == "[]"
