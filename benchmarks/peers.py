@@ -4,6 +4,8 @@ same warm start and cold against cold.
     python benchmarks/peers.py --N 501     # -> results/benchmarks/peers_N501.json
     python benchmarks/peers.py --N 201     # the ratio on a coarser mesh
     python benchmarks/peers.py --N 501 --route multigrid   # our multigrid route: peers_N501_multigrid.json
+    python benchmarks/peers.py --N 512 --route multigrid --methods petsc_rsls_pcmg,petsc_tron_boomeramg
+        # geometric multigrid on PETSc's DMDA (GRID_METHODS), on a grid whose cells halve
 
 The configurations (of the shipped work-precision study, ``workflow/config.yaml``): our
 ``solve_discrete`` by ``--route`` (the direct route, ``active_set``, or ``multigrid``) from the
@@ -58,13 +60,24 @@ ROOT = Path(__file__).resolve().parents[1]
 METHODS = ["petsc_tron_boomeramg", "petsc_rsls_cholmod", "petsc_rsls_boomeramg"]
 TARGET_RATIO = 5.0
 TIME_LIMIT_S = 600.0
+# peers outside the study: geometric multigrid on the grid's DMDA with Galerkin coarse operators (the
+# set-up of PETSc's obstacle example, on our matrix), for grids whose cells halve (N = 512, 1024,
+# ...); on the study's meshes (N = 101 ... 501, none of them even) the driver answers "unavailable"
+GRID_METHODS = {
+    "petsc_rsls_pcmg": {
+        "solver": "petsc_snes",
+        "label": "vinewtonrsls + CG/PCMG (DMDA, Galerkin)",
+        "options": {"snes_type": "vinewtonrsls", "ksp_type": "cg", "pc_type": "mg", "dm_type": "da"},
+    },
+}
 
 
 def race_configs(names: list[str], route: str = "active_set") -> dict:
-    """Ours by ``route`` (cascade, cold) and the named peers of the shipped study, each also from
-    the cascade start."""
+    """Ours by ``route`` (cascade, cold) and the named peers of the shipped study or of
+    ``GRID_METHODS``, each also from the cascade start."""
     config = yaml.safe_load((ROOT / "workflow/config.yaml").read_text(encoding="utf-8"))
-    study = {**config["scenes"]["work_precision"]["study"], "same_warm_start": True}
+    study = config["scenes"]["work_precision"]["study"]
+    study = {**study, "configs": {**study["configs"], **GRID_METHODS}, "same_warm_start": True}
     configs = study_configs(study)
     unknown = [n for n in names if n not in configs or not configs[n].peer]
     if unknown:

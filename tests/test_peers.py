@@ -39,6 +39,20 @@ def test_driver_reads_inner_solvers_and_tolerances():
     assert (warm["tao_gatol"], warm["tao_gttol"], warm["tao_grtol"]) == (2e-6, 0.0, 0.0)
 
 
+def test_geometric_multigrid_levels_follow_the_grids_halvings():
+    """PCMG on the grid's DMDA (``dm_type da``): one level more than the cells per side halve down
+    to the coarsest grid kept; none where they do not halve (the study's odd N) or the unknowns
+    are not a square grid."""
+    driver = _driver()
+    assert driver.dmda_levels(33**2) == (4, "")  # 32 → 16 → 8 → 4 cells
+    assert driver.dmda_levels(513**2) == (8, "")  # 512 → ... → 4
+    assert driver.dmda_levels(25**2) == (3, "")  # 24 → 12 → 6 cells: 3 would be below the coarsest kept
+    for n in (502**2, 12**2):  # 501 and 11 cells per side
+        levels, why = driver.dmda_levels(n)
+        assert levels == 0 and "cannot be coarsened" in why
+    assert driver.dmda_levels(500)[0] == 0 and "square" in driver.dmda_levels(500)[1]
+
+
 @pytest.mark.parametrize("kind", sorted(FAKE_INTERPRETERS))
 def test_any_failure_to_start_the_peer_is_unavailable_with_its_reason(tmp_path, kind):
     found = peers.probe(fake_interpreter(tmp_path, kind), DRIVER)

@@ -17,7 +17,9 @@ python3-petsc4py-real``, used by ``/usr/bin/python3``); it imports nothing of th
     petsc_peer.py solve SYSTEM.npz REQUEST.json OUTDIR
         SYSTEM.npz: the ``discretise`` archive (``data``, ``indices``, ``indptr``, ``shape``,
         ``b``, ``boundary``).  REQUEST.json: ``kind`` (``snes`` or ``tao``), ``options`` (PETSc
-        options database, without the leading dash), ``tol`` (null: PETSc's defaults),
+        options database, without the leading dash; ``dm_type: da`` puts a SNES on the DMDA of
+        the grid, for PCMG with Galerkin coarse operators on as many levels as the grid halves,
+        ``dmda_levels``), ``tol`` (null: PETSc's defaults),
         ``repeat_below_s``, ``repeats``, ``initial_guess`` (optional: an ``.npz`` file whose
         ``u`` is the start; projected onto the bounds).  Writes OUTDIR/solution.npz (``u``) and
         OUTDIR/result.json (status, converged reason, iterations, setup and solve times, the
@@ -38,6 +40,7 @@ from __future__ import annotations
 import glob
 import importlib
 import json
+import math
 import os
 import sys
 import time
@@ -181,8 +184,43 @@ def load_system(path: str, PETSc):
     return A, b, lb, ub
 
 
+MIN_COARSE_CELLS = 4  # PCMG on a DMDA: the coarsest grid keeps at least this many cells per side
+
+
+def dmda_levels(n: int) -> tuple[int, str]:
+    """(levels, "") of geometric multigrid on a DMDA of the ``n`` unknowns of a square grid of
+    vertices — the number of times its cells per side halve down to ``MIN_COARSE_CELLS``, plus
+    one — or (0, why not).  PETSc's DMDA interpolation joins vertex grids whose cell counts divide
+    each other (``(mx − 1)/(Mx − 1)`` an integer), so halving needs an even number of cells."""
+    side = math.isqrt(n)
+    if side * side != n:
+        return 0, f"{n} unknowns are not a square grid of vertices"
+    cells, halvings = side - 1, 0
+    while cells % 2 == 0 and cells // 2 >= MIN_COARSE_CELLS:
+        cells, halvings = cells // 2, halvings + 1
+    if halvings == 0:
+        return 0, (f"a DMDA of {side - 1} cells per side cannot be coarsened: PETSc's DMDA interpolation "
+                   f"needs the coarse grid's cells to divide the fine grid's")
+    return halvings + 1, ""
+
+
+def grid_dm(PETSc, n: int):
+    """The DMDA of the square grid of ``n`` vertices (one unknown each, box stencil).  The archive's
+    vertex (i, j) has index i·side + j: the DMDA's natural ordering with its x index j and y index
+    i, the same grid with its axes named the other way round."""
+    side = math.isqrt(n)
+    da = PETSc.DMDA().create(
+        dim=2, sizes=(side, side), dof=1, stencil_width=1, stencil_type=PETSc.DMDA.StencilType.BOX,
+        comm=PETSc.COMM_SELF,
+    )
+    da.setUp()
+    return da
+
+
 def make_snes(PETSc, A, b, lb, ub):
-    """SNES for the variational inequality F(u) = Au − b, bounds lb ≤ u ≤ ub."""
+    """SNES for the variational inequality F(u) = Au − b, bounds lb ≤ u ≤ ub; with the option
+    ``dm_type da``, on the DMDA of the grid (``grid_dm``), whose interpolations PCMG coarsens with
+    (the reduced-space method restricts them to the inactive nodes of each step)."""
 
     def residual(snes, x, f):
         A.mult(x, f)
@@ -192,6 +230,8 @@ def make_snes(PETSc, A, b, lb, ub):
         return None
 
     snes = PETSc.SNES().create(comm=PETSc.COMM_SELF)
+    if PETSc.Options().getString("dm_type", "") == "da":
+        snes.setDM(grid_dm(PETSc, A.getSize()[0]))
     snes.setFunction(residual, b.duplicate())
     snes.setJacobian(jacobian, A, A)
     snes.setVariableBounds(lb, ub)
@@ -350,6 +390,14 @@ def solve(system: str, request: dict, outdir: str) -> dict:
     if missing:
         result.update(status="unavailable", reason=f"PETSc {result['petsc_version']} here has no {missing}")
         return _write(outdir, result, None)
+    if options.get("dm_type") == "da":  # geometric multigrid on the grid: as many levels as it allows
+        with np.load(system, allow_pickle=False) as d:
+            levels, why = dmda_levels(int(d["shape"][0]))
+        if not levels:
+            result.update(status="unavailable", reason=why)
+            return _write(outdir, result, None)
+        options = {"pc_mg_levels": levels, "pc_mg_galerkin": "both", **options}
+        result["options"] = options
     db = PETSc.Options()
     for key, value in options.items():
         db.setValue(key, str(value))

@@ -235,3 +235,30 @@ def test_a_peer_factorisation_runs_on_one_thread(tmp_path, petsc_probe):
         answers[name] = json.loads((out / "result.json").read_text(encoding="utf-8"))
     assert answers["petsc_rsls_cholmod"]["threads"] == answers["petsc_tron_boomeramg"]["threads"]
     assert answers["unlimited"]["threads"] > answers["petsc_rsls_cholmod"]["threads"]
+
+
+@pytest.mark.peers
+def test_geometric_multigrid_on_the_grids_dmda_runs_where_the_cells_halve(tmp_path, petsc_probe):
+    """``dm_type da`` (the race's PCMG peer, ``benchmarks/peers.py``): on a grid of 32 cells per
+    side PCMG coarsens the DMDA three times, and vinewtonrsls with CG/PCMG reaches our certified
+    solution; on 33 cells the driver answers ``unavailable`` with PETSc's reason instead of a
+    one-level "multigrid"."""
+    from signorini.timing import Protocol, ReferenceKernel, Timer
+
+    options = {"snes_type": "vinewtonrsls", "ksp_type": "cg", "pc_type": "mg", "dm_type": "da"}
+    config = SolverConfig("petsc_rsls_pcmg", "petsc_snes", "vinewtonrsls + CG/PCMG", options)
+    for N, status in [(32, "ok"), (33, "skipped")]:
+        (tmp_path / str(N)).mkdir()
+        inputs = _system(tmp_path / str(N), N)
+        at = SceneMesh(PROBLEM, N, "sw_ne")
+        A, b, boundary = load_system(inputs["system"], N)
+        disc = DiscreteProblem(at.problem, N, "sw_ne", at.mesh(), A, b, boundary)
+        route = PeerRoute(TEST_PEER_PYTHON, str(DRIVER), str(inputs["system"]), petsc_probe)
+        out = peers.run_peer(config, route, disc, 1e-10, 120.0, Timer(Protocol.from_mapping(FAST)), ReferenceKernel(A))
+        assert out.status == status, (N, out.reason)
+        if status == "ok":
+            exact = np.load(inputs["exact"])["u"]
+            assert np.abs(out.result.u - exact).max() <= 1e-10 * np.abs(exact).max()
+            assert out.extra["peer"]["options"]["pc_mg_levels"] == 4  # 32 → 16 → 8 → 4 cells
+        else:
+            assert "cannot be coarsened" in out.reason
