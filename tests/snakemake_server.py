@@ -67,13 +67,16 @@ PRELOADED = (
 )
 
 
-def preload() -> None:
-    """Import ``snakemake.cli`` and ``PRELOADED``, and collect the report and executor plugins (what
-    the first call in every child would do); a module that is not installed is left to the child."""
+def preload(modules: bool = True) -> None:
+    """Import ``snakemake.cli`` and (``modules``) ``PRELOADED``, and collect the report and executor
+    plugins (what the first call in every child would do); a module that is not installed is left
+    to the child."""
     import importlib
 
     import snakemake.cli  # noqa: F401 -- the import every call would otherwise pay
 
+    if not modules:
+        return
     for name in PRELOADED:
         try:
             importlib.import_module(name)
@@ -86,10 +89,11 @@ def preload() -> None:
     ExecutorPluginRegistry()
 
 
-def serve() -> None:
-    """The server's loop: a request per line of stdin, ``{"pid": ...}`` and ``{"rc": ...}`` on stdout."""
+def serve(modules: bool = True) -> None:
+    """The server's loop: a request per line of stdin, ``{"pid": ...}`` and ``{"rc": ...}`` on stdout;
+    ``modules=False`` (``--no-preload``): only ``snakemake.cli`` loaded before the fork."""
     sys.dont_write_bytecode = True
-    preload()
+    preload(modules)
 
     for line in sys.stdin:
         request = json.loads(line)
@@ -104,14 +108,15 @@ def serve() -> None:
 class Server:
     """A client of one server process (started on first use, stopped at exit)."""
 
-    def __init__(self) -> None:
+    def __init__(self, preload: bool = True) -> None:
         self._proc: subprocess.Popen | None = None
+        self._preload = preload
         self._lock = threading.Lock()
 
     def _server(self) -> subprocess.Popen:
         if self._proc is None or self._proc.poll() is not None:
             self._proc = subprocess.Popen(
-                [sys.executable, __file__],
+                [sys.executable, __file__, *([] if self._preload else ["--no-preload"])],
                 stdin=subprocess.PIPE,
                 stdout=subprocess.PIPE,
                 text=True,
@@ -147,4 +152,4 @@ class Server:
 
 
 if __name__ == "__main__":
-    serve()
+    serve(modules="--no-preload" not in sys.argv[1:])
