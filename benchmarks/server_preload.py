@@ -29,6 +29,8 @@ sys.path.insert(0, str(ROOT / "tests"))  # the tests' server
 
 from snakemake_server import PRELOADED, Server  # noqa: E402
 
+from signorini import intervals  # noqa: E402
+
 SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
 DRY_RUN = ["-n", "results/smoke/errors.csv"]
 
@@ -59,10 +61,14 @@ def summary(values: list[float]) -> dict:
 
 
 def compare(rounds: list[dict]) -> dict:
-    """Per kind the wall seconds per call, and the round-by-round ratio preloaded / not preloaded."""
+    """Per kind the wall seconds per call; the round-by-round ratio preloaded / not preloaded; and the
+    ratio of the two kinds' medians with its bootstrap interval and verdict (``signorini.intervals``)."""
+    walls = {kind: [r[kind]["wall_s"] for r in rounds] for kind in ("cli_only", "preloaded")}
+    ratio = intervals.ratio(*(intervals.median(walls[k], ("server_preload", k)) for k in ("preloaded", "cli_only")))
     return {
-        "wall_s_per_call": {kind: summary([r[kind]["wall_s"] for r in rounds]) for kind in ("cli_only", "preloaded")},
+        "wall_s_per_call": {kind: summary(values) for kind, values in walls.items()},
         "preloaded_over_cli_only": summary([r["preloaded"]["wall_s"] / r["cli_only"]["wall_s"] for r in rounds]),
+        "ratio_of_medians": ratio.summary() | {"verdict": intervals.verdict(ratio)},
         "load1_before": summary([r[kind]["load1_before"] for r in rounds for kind in ("cli_only", "preloaded")]),
     }
 
@@ -93,8 +99,8 @@ def main(argv: list[str] | None = None) -> int:
 
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(result, indent=1) + "\n", encoding="utf-8")
-    ratio = result["preloaded_over_cli_only"]
-    print(f"wall per dry run: {result['wall_s_per_call']}; preloaded / cli only {ratio} -> {args.out}")
+    ratio, verdict = result["ratio_of_medians"], result["ratio_of_medians"]["verdict"]
+    print(f"wall per dry run: {result['wall_s_per_call']}; preloaded / cli only {ratio} ({verdict}) -> {args.out}")
     return 0
 
 

@@ -19,3 +19,5 @@ def test_the_ratio_is_taken_round_by_round():
     assert out["preloaded_over_cli_only"] == {"median": 0.75, "min": 0.5, "max": 1.0}
     assert out["wall_s_per_call"]["cli_only"] == {"median": 2.2, "min": 2.0, "max": 4.0}
     assert out["load1_before"]["max"] == 1.5
+    # the medians 2.0 and 2.2 with their bootstrap: an interval that holds 1 here, a tie
+    assert out["ratio_of_medians"]["value"] == 2.0 / 2.2 and out["ratio_of_medians"]["verdict"] == "tie"
