@@ -16,6 +16,7 @@ one thread, so on a quiet machine its wall time is its CPU time.  Written to
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
 import shutil
@@ -98,8 +99,6 @@ def main(argv: list[str] | None = None) -> int:
         "rounds": rounds,
         "python": sys.version.split()[0],
     }
-    import json
-
     args.out.parent.mkdir(parents=True, exist_ok=True)
     args.out.write_text(json.dumps(result, indent=1) + "\n", encoding="utf-8")
     ratio = result["preloaded_over_cli_only"]

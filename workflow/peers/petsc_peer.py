@@ -393,6 +393,8 @@ def solve(system: str, request: dict, outdir: str) -> dict:
     if options.get("dm_type") == "da":  # geometric multigrid on the grid: as many levels as it allows
         with np.load(system, allow_pickle=False) as d:
             levels, why = dmda_levels(int(d["shape"][0]))
+        if kind != "snes":  # make_tao puts no DM under TAO's inner solver
+            levels, why = 0, "dm_type da is given to a SNES only"
         if not levels:
             result.update(status="unavailable", reason=why)
             return _write(outdir, result, None)

@@ -262,3 +262,7 @@ def test_geometric_multigrid_on_the_grids_dmda_runs_where_the_cells_halve(tmp_pa
             assert out.extra["peer"]["options"]["pc_mg_levels"] == 4  # 32 → 16 → 8 → 4 cells
         else:
             assert "cannot be coarsened" in out.reason
+    tron = SolverConfig("petsc_tron_pcmg", "petsc_tao", "TRON + PCMG", {"tao_type": "tron", "pc_type": "mg",
+                                                                        "dm_type": "da"})
+    out = peers.run_peer(tron, route, disc, 1e-10, 120.0, Timer(Protocol.from_mapping(FAST)), ReferenceKernel(A))
+    assert out.status == "skipped" and "SNES only" in out.reason  # no DM under TAO's inner solver
