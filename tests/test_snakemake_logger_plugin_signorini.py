@@ -261,6 +261,43 @@ def test_a_ctrl_c_snakemake_does_not_catch_is_one_line_its_traceback_in_the_log(
     assert seen == [ValueError]
 
 
+TEAR_DOWN_ERROR = "Traceback (most recent call last):\n  ...\nRuntimeError: Cannot close a running event loop"
+
+
+@pytest.mark.parametrize("interrupted", [True, False])
+def test_after_ctrl_c_what_snakemake_logs_past_its_console_goes_to_its_log_file(tmp_path, monkeypatch, capsys,
+                                                                                 interrupted):
+    """Snakemake closes its console and log file, then tears the workflow down; after Ctrl-C that
+    can fail (the event loop of a worker thread still running), and its traceback, logged with no
+    handler left, reached the console through Python's handler of last resort.  After Ctrl-C it
+    goes to Snakemake's log file; without Ctrl-C the console shows it as before."""
+    monkeypatch.setattr(console, "command_line", lambda argv: (["all"], True))
+    monkeypatch.setattr(logging, "lastResort", logging.lastResort)
+    snakemake_logger = logging.getLogger("snakemake.logging")
+    monkeypatch.setattr(snakemake_logger, "propagate", False)  # not to pytest's capturing handler on the root
+    path = tmp_path / "snakemake.log"
+    log = logging.FileHandler(path, encoding="utf-8")
+    snakemake_logger.addHandler(log)
+    try:
+        h, out = handler()
+        if interrupted:
+            h.emit(record("Terminating processes on user request, this might take some time."))
+    finally:  # as Snakemake's logger manager stops: its handlers closed and removed
+        h.close()
+        snakemake_logger.removeHandler(log)
+        log.close()
+    snakemake_logger.error(TEAR_DOWN_ERROR)
+    console_text = capsys.readouterr().err
+    if interrupted:
+        assert out.getvalue() == "interrupted: no job had finished; the same command starts again\n"
+        assert console_text == ""
+        assert path.read_text(encoding="utf-8").endswith(TEAR_DOWN_ERROR + "\n")
+    else:
+        assert out.getvalue() == ""
+        assert "Cannot close a running event loop" in console_text
+        assert "Cannot close" not in path.read_text(encoding="utf-8")
+
+
 def test_jobs_start_with_sigint_blocked_and_the_package_delivers_it_quietly(monkeypatch):
     """Threads started after ``block_interrupts_in_threads`` block SIGINT, and so do the processes
     they start (through bash, as Snakemake starts a job); a Ctrl-C that reaches such a job before

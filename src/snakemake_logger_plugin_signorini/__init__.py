@@ -250,6 +250,29 @@ def _until_option(words: list[str]) -> list[str]:
     return out
 
 
+def snakemake_log_files() -> list[str]:
+    """The log files Snakemake writes this run to (``.snakemake/log/...``; none in a dry run)."""
+    handlers = logging.getLogger("snakemake.logging").handlers
+    return [h.baseFilename for h in handlers if isinstance(h, logging.FileHandler)]
+
+
+class AfterInterrupt(logging.Handler):
+    """The handler of last resort after Ctrl-C (``LogHandler.close``): each record appended to
+    Snakemake's log files, none on the console."""
+
+    def __init__(self, paths: Sequence[str]) -> None:
+        super().__init__(logging.DEBUG)
+        self.paths = list(paths)
+
+    def emit(self, record: logging.LogRecord) -> None:
+        for path in self.paths:
+            try:
+                with open(path, "a", encoding="utf-8") as log:
+                    log.write(record.getMessage().rstrip("\n") + "\n")
+            except OSError:
+                pass
+
+
 class LogHandler(LogHandlerBase):
     """The short console (see the module docstring)."""
 
@@ -267,6 +290,7 @@ class LogHandler(LogHandlerBase):
         self.started: float | None = None
         self.done, self.total = 0, 0
         self.interrupted = False
+        self.log_files: list[str] = []
         self.hinted = False
         # Ctrl-C: the jobs end quietly (block_interrupts_in_threads); Snakemake itself does not catch
         # it while it reads the workflow or plans the jobs: then excepthook says the one line
@@ -292,6 +316,7 @@ class LogHandler(LogHandlerBase):
         """Print the one line of Ctrl-C (once)."""
         if not self.interrupted:
             self.interrupted = True
+            self.log_files = snakemake_log_files()
             command = self.command_line()
             self.write(interrupt_line(self.done, self.total, command is not None and command[1]))
 
@@ -301,11 +326,20 @@ class LogHandler(LogHandlerBase):
         if not issubclass(kind, KeyboardInterrupt):
             self.previous_excepthook(kind, value, tb)
             return
-        for handler in logging.getLogger("snakemake.logging").handlers:
-            if isinstance(handler, logging.FileHandler):
-                with open(handler.baseFilename, "a", encoding="utf-8") as log:
-                    log.write("".join(traceback.format_exception(kind, value, tb)))
+        for path in snakemake_log_files():
+            with open(path, "a", encoding="utf-8") as log:
+                log.write("".join(traceback.format_exception(kind, value, tb)))
         self.interrupt()
+
+    def close(self) -> None:
+        """Snakemake closes its console, then tears the workflow down; after Ctrl-C that tear-down
+        can fail (it closes the event loop of a worker thread that is still running one,
+        ``RuntimeError: Cannot close a running event loop``), and Snakemake logs the traceback to a
+        logger with no handler left, which Python prints on the console (``logging.lastResort``).
+        After the one line of Ctrl-C, what is logged so goes to Snakemake's log file instead."""
+        if self.interrupted:
+            logging.lastResort = AfterInterrupt(self.log_files)
+        super().close()
 
     def input_error(self, record: logging.LogRecord) -> str | None:
         """The one line of an input function's exception that is the user's mistake (``input_error_line``)."""
