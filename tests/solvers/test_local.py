@@ -141,3 +141,18 @@ def test_the_patch_problem_is_the_submatrix_with_the_rest_as_dirichlet_data(rng)
     np.testing.assert_array_equal(matrix.toarray(), A.toarray()[np.ix_(patch, patch)])
     expected = b[patch] - A.toarray()[np.ix_(patch, np.flatnonzero(~inside))] @ u[~inside]
     np.testing.assert_allclose(load, expected, rtol=1e-14, atol=1e-14)
+
+
+@pytest.mark.parametrize("route", ["multigrid", "active_set"])
+def test_a_first_reach_of_two_saves_a_growth_step_from_the_cascade_and_changes_no_answer(route):
+    """At N = 101 the cascade's start is two nodes short at the contact zone's end near the free
+    point: a first reach of two admits both in the first Newton step (``pdas.WARM_START_REACH``),
+    one node per step takes a step more (a test on counts); the same contact set and u."""
+    disc = build(Problem(), 101)
+    one = solve_discrete(disc, route, warm_start_reach=1)
+    two = solve_discrete(disc, route)
+    assert two.iterations == one.iterations - 1
+    if route == "multigrid":
+        assert two.info["v_cycles"] < one.info["v_cycles"]
+    np.testing.assert_array_equal(np.sort(two.active), np.sort(one.active))
+    assert np.abs(two.u - one.u).max() <= AGREEMENT * np.abs(one.u).max() and two.certificate.ok

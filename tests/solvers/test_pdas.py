@@ -11,7 +11,7 @@ import scipy.sparse as sp
 
 from signorini.solvers import NotConvergedError, active_set_solve
 from signorini.solvers.active_set import DirectSystems
-from signorini.solvers.pdas import CREEP_STEPS, Frontier, initial_active, iterate, prepare_qp
+from signorini.solvers.pdas import CREEP_STEPS, WARM_START_REACH, Frontier, initial_active, iterate, prepare_qp
 
 log = logging.getLogger(__name__)
 
@@ -112,23 +112,32 @@ def _path_adjacency(n: int) -> sp.csr_matrix:
     return sp.diags([np.ones(n - 1), np.ones(n - 1)], [-1, 1], format="csr")
 
 
-def test_frontier_creeps_one_node_per_end_then_doubles_its_reach():
-    """A contact set in the middle of a line of 201 nodes, every other node violated: one node
-    per end and step for the first steps, then a reach that doubles, so the line is covered in
-    ``CREEP_STEPS + log₂ 100`` steps or so instead of 100."""
-    n = 201
-    frontier, active = Frontier(_path_adjacency(n)), np.zeros(n, dtype=bool)
+def _grown_sizes(frontier: Frontier, n: int) -> list[int]:
+    """The contact set's size after each step on a line of ``n`` nodes, every node violated, from
+    the middle node."""
+    active = np.zeros(n, dtype=bool)
     active[n // 2] = True
     sizes = []
     while not active.all():
         active = active | frontier.restrict(~active, active)
         sizes.append(int(active.sum()))
+    return sizes
+
+
+@pytest.mark.parametrize("first_reach", [1, WARM_START_REACH])
+def test_frontier_creeps_one_node_per_end_then_doubles_its_reach(first_reach):
+    """A contact set in the middle of a line of 201 nodes, every node violated: ``first_reach``
+    nodes per end in the first step, one per end and step in the next ones, then a reach that
+    doubles, so the line is covered in ``CREEP_STEPS + log₂ 100`` steps or so instead of 100."""
+    n = 201
+    sizes = _grown_sizes(Frontier(_path_adjacency(n), first_reach), n)
     expected, size = [], 1
-    while size < n:  # reach 1 for CREEP_STEPS steps, then 2, 4, 8, … at both ends
-        size = min(n, size + 2 * 2 ** max(0, len(expected) - CREEP_STEPS))
+    while size < n:  # first_reach, then 1 up to CREEP_STEPS held steps, then 2, 4, 8, … at both ends
+        reach = first_reach if not expected else 2 ** max(0, len(expected) - CREEP_STEPS)
+        size = min(n, size + 2 * reach)
         expected.append(size)
-    assert sizes == expected
-    assert sizes[:3] == [3, 5, 7] and len(sizes) <= CREEP_STEPS + 8
+    assert sizes == expected and len(sizes) <= CREEP_STEPS + 8
+    assert sizes[:3] == ([3, 5, 7] if first_reach == 1 else [5, 7, 9])
 
 
 def test_frontier_takes_the_full_step_when_no_violated_node_is_near():

@@ -26,7 +26,15 @@ import scipy.sparse as sp
 
 from signorini.solvers.certificate import NotConvergedError
 from signorini.solvers.linalg import Factorizer, Solve
-from signorini.solvers.pdas import StepCallback, certified_result, clamped_values, initial_active, iterate, prepare_qp
+from signorini.solvers.pdas import (
+    WARM_START_REACH,
+    StepCallback,
+    certified_result,
+    clamped_values,
+    initial_active,
+    iterate,
+    prepare_qp,
+)
 from signorini.solvers.result import SolveResult
 
 log = logging.getLogger(__name__)
@@ -177,6 +185,7 @@ def active_set_solve(
     frontier_growth: bool = True,
     warm_start_dilation: int = 0,
     backend: str = "auto",
+    warm_start_reach: int = WARM_START_REACH,
     *,
     callback: StepCallback | None = None,
 ) -> SolveResult:
@@ -184,6 +193,8 @@ def active_set_solve(
 
     ``callback(row)`` receives each Newton step's row of ``SolveResult.history`` (iteration,
     active nodes, changes, factorisations and correction columns so far, elapsed seconds).
+    ``warm_start_reach``: the frontier's reach in the first Newton step from ``warm_start``
+    (``pdas.Frontier``; one node from the cold start).
     Raises ``NotConvergedError`` when the set has not repeated after ``max_iter``
     Newton steps or cycles, and ``KKTError`` when the final certificate exceeds ``kkt_tol``.
     """
@@ -191,6 +202,7 @@ def active_set_solve(
     A, b, B = prepare_qp(A, b, constrained)
     active = initial_active(A, b, B, warm_start, warm_start_dilation)
     systems = DirectSystems(A, b, refactor_above, backend)
-    u, active, history = iterate(systems, A, b, B, active, max_iter, frontier_growth, callback, log)
+    reach = warm_start_reach if warm_start is not None else 1
+    u, active, history = iterate(systems, A, b, B, active, max_iter, frontier_growth, callback, log, None, reach)
     u = systems.refine(u)
     return certified_result(A, b, B, u, active, kkt_tol, t0, "active_set", systems.info(), history)

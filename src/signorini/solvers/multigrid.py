@@ -80,7 +80,15 @@ import scipy.sparse as sp
 from signorini.solvers import certificate
 from signorini.solvers.certificate import KKTError, NotConvergedError, abs_product
 from signorini.solvers.local import concatenated_ranges, settle_release
-from signorini.solvers.pdas import StepCallback, certified_result, clamped_values, initial_active, iterate, prepare_qp
+from signorini.solvers.pdas import (
+    WARM_START_REACH,
+    StepCallback,
+    certified_result,
+    clamped_values,
+    initial_active,
+    iterate,
+    prepare_qp,
+)
 from signorini.solvers.result import SolveResult
 
 log = logging.getLogger(__name__)
@@ -571,6 +579,7 @@ def multigrid_solve(
     max_cg_iter: int = 500,
     max_coarse: int = 500,
     local_release: bool = True,
+    warm_start_reach: int = WARM_START_REACH,
     *,
     callback: StepCallback | None = None,
     grid: Grid | None = None,
@@ -586,8 +595,10 @@ def multigrid_solve(
     ``inner_rtol``: of the solves while the set moves; ``max_cg_iter``: per solve;
     ``max_coarse``: unknowns of the coarsest level (a dense Cholesky factorisation; a smaller
     system is solved by it alone); ``local_release``: settle a Newton step that only releases
-    nodes on a patch around them (``solvers.local``); ``grid``: the grid of a geometric hierarchy, where ``A``'s
-    own is not uniform (the coarse problems of ``nested_start``).  ``callback(row)`` receives
+    nodes on a patch around them (``solvers.local``); ``warm_start_reach``: the frontier's reach in
+    the first Newton step from ``warm_start`` (``pdas.Frontier``; one node from the route's own
+    start); ``grid``: the grid of a geometric hierarchy, where ``A``'s own is not uniform (the
+    coarse problems of ``nested_start``).  ``callback(row)`` receives
     each Newton step's row of ``SolveResult.history`` (iteration, active nodes, changes, the
     step's CG iterations and final energy residual, whether it was an accurate solve, elapsed
     seconds).  Raises ``NotConvergedError`` (the set does not settle in ``max_iter`` steps, CG
@@ -602,7 +613,7 @@ def multigrid_solve(
     shared = dict(amg=amg, tol=tol, inner_rtol=inner_rtol, max_cg_iter=max_cg_iter, max_coarse=max_coarse)
     systems = MultigridSystems(A, b, np.zeros_like(b), shared | {"grid": grid, "B": B, "kkt_tol": kkt_tol})
     settle = systems.settle if local_release else None
-    nested = None
+    nested, reach = None, warm_start_reach if warm_start is not None else 1
     if warm_start is None:
         iteration = dict(max_iter=max_iter, kkt_tol=kkt_tol, frontier_growth=frontier_growth)
         iteration |= {"local_release": local_release}
@@ -611,7 +622,7 @@ def multigrid_solve(
     if warm_start is not None:
         systems.x = np.asarray(warm_start, dtype=float)
     try:
-        u, active, history = iterate(systems, A, b, B, active, max_iter, frontier_growth, callback, log, settle)
+        u, active, history = iterate(systems, A, b, B, active, max_iter, frontier_growth, callback, log, settle, reach)
     except NotConvergedError as err:
         if nested is None:
             raise

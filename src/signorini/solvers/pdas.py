@@ -32,6 +32,9 @@ StepCallback = Callable[[dict], None]
 Settle = Callable[[np.ndarray, np.ndarray, np.ndarray], "tuple[np.ndarray, np.ndarray, dict] | None"]
 MAX_SETTLES = 8  # releases settled locally per solve, at most (each costs a small exact solve)
 CREEP_STEPS = 3  # frontier steps of one node per end before the frontier's reach starts doubling
+# the frontier's reach in the first Newton step from a warm start the caller gives (the cascade's
+# interpolant); one node from the routes' own starts (docs/evidence/design-measurements.md#frontier-first-reach)
+WARM_START_REACH = 2
 
 
 class NewtonSystems(Protocol):
@@ -106,8 +109,9 @@ def initial_active(
 
 class Frontier:
     """Frontier growth: violated nodes enter only within ``reach`` boundary neighbours of the
-    contact set while any such exists; ``reach`` is one node for the first ``CREEP_STEPS`` steps
-    that hold nodes back and doubles with each one after them.
+    contact set while any such exists; ``reach`` is ``first_reach`` nodes in the first step, one
+    node for the first ``CREEP_STEPS`` steps that hold nodes back and doubles with each one after
+    them.
 
     Growing the contact set only at its ends keeps an undersized set near the free point from
     pushing the whole far boundary (where u_h is O(h²)-small and biactive in the limit) into
@@ -115,14 +119,23 @@ class Frontier:
     With a fixed reach of one node a set that must grow by m nodes takes about m/2 steps (one
     per end and step); the doubling reach takes about log₂ m more after the first few, and a set
     a few nodes short still grows one node per end and step.  The full step is taken when no
-    violated node is within reach, so termination is PDAS's own."""
+    violated node is within reach, so termination is PDAS's own.
 
-    def __init__(self, adjacency: sp.csr_matrix):
+    From a warm start interpolated from a coarser mesh the first step reaches ``WARM_START_REACH``
+    nodes: the interpolant misses the fine nodes at a contact zone's end where the coarse solution
+    is still positive, often two, which one node per step admits in two Newton steps (a reach of
+    three admits nodes at the zone's biactive end that the next steps release again)."""
+
+    def __init__(self, adjacency: sp.csr_matrix, first_reach: int = 1):
         self.adjacency = adjacency
+        self.first_reach = first_reach
+        self.steps = 0  # steps restricted so far
         self.held = 0  # steps that held violated nodes back
 
     @property
     def reach(self) -> int:
+        if self.steps == 0:
+            return self.first_reach
         return 1 << max(0, self.held - CREEP_STEPS)
 
     def restrict(self, grow: np.ndarray, active: np.ndarray) -> np.ndarray:
@@ -130,6 +143,7 @@ class Frontier:
         near = active
         for _ in range(min(self.reach, active.size)):
             near = near | ((self.adjacency @ near.astype(np.int8)) > 0)
+        self.steps += 1
         frontier = grow & near
         if not frontier.any():
             return grow
@@ -184,6 +198,7 @@ def iterate(
     callback: StepCallback | None,
     log: logging.Logger,
     settle: Settle | None = None,
+    first_reach: int = 1,
 ) -> tuple[np.ndarray, np.ndarray, list[dict]]:
     """Newton steps from the mask ``active`` until the set repeats on an accurate solve:
     ``(u, active, history)``.  Inexact solves while the set moves; a set that repeats on one is
@@ -191,9 +206,10 @@ def iterate(
     to accurate solves for good; a cycle of accurate ones, or ``max_iter`` steps, raises
     ``NotConvergedError``.  With ``settle``, an inexact step that only releases nodes is handed to
     it (at most ``MAX_SETTLES`` times), and the iteration goes on from the set and iterate it
-    returns (``solvers.local``); the final test is the same."""
+    returns (``solvers.local``); the final test is the same.  ``first_reach``: the frontier's reach
+    in the first step (``Frontier``)."""
     t0 = time.perf_counter()
-    frontier = Frontier(boundary_adjacency(A, B)) if frontier_growth else None
+    frontier = Frontier(boundary_adjacency(A, B), first_reach) if frontier_growth else None
     seen: set[bytes] = set()
     history: list[dict] = []
     accurate = always = systems.exact

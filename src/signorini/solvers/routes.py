@@ -65,6 +65,7 @@ DIRECT = Route(
         "frontier_growth": Option(bool, default=True),
         "warm_start_dilation": Option(int, default=0),
         "backend": Option(str, default="auto"),
+        "warm_start_reach": Option(int, default=2),
     },
 )
 MULTIGRID = Route(
@@ -82,6 +83,7 @@ MULTIGRID = Route(
         "max_cg_iter": Option(int, default=500),
         "max_coarse": Option(int, default=500),
         "local_release": Option(bool, default=True),
+        "warm_start_reach": Option(int, default=2),
     },
 )
 CVXPY = Route(
