@@ -156,3 +156,10 @@ def test_a_first_reach_of_two_saves_a_growth_step_from_the_cascade_and_changes_n
         assert two.info["v_cycles"] < one.info["v_cycles"]
     np.testing.assert_array_equal(np.sort(two.active), np.sort(one.active))
     assert np.abs(two.u - one.u).max() <= AGREEMENT * np.abs(one.u).max() and two.certificate.ok
+
+
+@pytest.mark.parametrize("route", ["multigrid", "active_set"])
+def test_a_first_reach_below_one_node_is_refused(route):
+    disc = build(Problem(), 21)
+    with pytest.raises(ValueError, match="warm_start_reach >= 1"):
+        solve_discrete(disc, route, warm_start_reach=0)

@@ -198,6 +198,8 @@ def active_set_solve(
     Raises ``NotConvergedError`` when the set has not repeated after ``max_iter``
     Newton steps or cycles, and ``KKTError`` when the final certificate exceeds ``kkt_tol``.
     """
+    if warm_start_reach < 1:
+        raise ValueError(f"need warm_start_reach >= 1 (nodes), got {warm_start_reach}")
     t0 = time.perf_counter()
     A, b, B = prepare_qp(A, b, constrained)
     active = initial_active(A, b, B, warm_start, warm_start_dilation)

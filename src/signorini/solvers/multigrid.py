@@ -609,6 +609,8 @@ def multigrid_solve(
         raise ValueError(f"unknown algebraic multigrid {amg!r}; choose one of {AMG_KINDS}")
     if not 0.0 < tol <= inner_rtol:
         raise ValueError(f"need 0 < tol <= inner_rtol, got tol={tol}, inner_rtol={inner_rtol}")
+    if warm_start_reach < 1:
+        raise ValueError(f"need warm_start_reach >= 1 (nodes), got {warm_start_reach}")
     A, b, B = prepare_qp(A, b, constrained)
     shared = dict(amg=amg, tol=tol, inner_rtol=inner_rtol, max_cg_iter=max_cg_iter, max_coarse=max_coarse)
     systems = MultigridSystems(A, b, np.zeros_like(b), shared | {"grid": grid, "B": B, "kkt_tol": kkt_tol})
