@@ -24,17 +24,10 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from signorini.solvers import pdas
 from signorini.solvers.certificate import NotConvergedError
 from signorini.solvers.linalg import Factorizer, Solve
-from signorini.solvers.pdas import (
-    WARM_START_REACH,
-    StepCallback,
-    certified_result,
-    clamped_values,
-    initial_active,
-    iterate,
-    prepare_qp,
-)
+from signorini.solvers.pdas import StepCallback, certified_result, clamped_values, initial_active, iterate, prepare_qp
 from signorini.solvers.result import SolveResult
 
 log = logging.getLogger(__name__)
@@ -185,7 +178,7 @@ def active_set_solve(
     frontier_growth: bool = True,
     warm_start_dilation: int = 0,
     backend: str = "auto",
-    warm_start_reach: int = WARM_START_REACH,
+    warm_start_reach: int = pdas.WARM_START_REACH,
     *,
     callback: StepCallback | None = None,
 ) -> SolveResult:

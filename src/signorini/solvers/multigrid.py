@@ -77,18 +77,10 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from signorini.solvers import certificate
+from signorini.solvers import certificate, pdas
 from signorini.solvers.certificate import KKTError, NotConvergedError, abs_product
 from signorini.solvers.local import concatenated_ranges, settle_release
-from signorini.solvers.pdas import (
-    WARM_START_REACH,
-    StepCallback,
-    certified_result,
-    clamped_values,
-    initial_active,
-    iterate,
-    prepare_qp,
-)
+from signorini.solvers.pdas import StepCallback, certified_result, clamped_values, initial_active, iterate, prepare_qp
 from signorini.solvers.result import SolveResult
 
 log = logging.getLogger(__name__)
@@ -579,7 +571,7 @@ def multigrid_solve(
     max_cg_iter: int = 500,
     max_coarse: int = 500,
     local_release: bool = True,
-    warm_start_reach: int = WARM_START_REACH,
+    warm_start_reach: int = pdas.WARM_START_REACH,
     *,
     callback: StepCallback | None = None,
     grid: Grid | None = None,
