@@ -71,3 +71,4 @@ def test_rules_are_computed_once_and_read_only():
     for array in (*stroud_conical(5), *gauss_legendre_01(6)):
         with pytest.raises(ValueError):
             array[0] = 0.0
+

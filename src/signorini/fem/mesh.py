@@ -8,7 +8,7 @@ diagonal (north-west to south-east, ``"nw_se"``).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
@@ -17,6 +17,15 @@ if TYPE_CHECKING:
 
 DIAGONALS = ("sw_ne", "nw_se")
 DEFAULT_DIAGONAL = DIAGONALS[0]  # the paper's (the README's conventions)
+
+
+class Triangles(NamedTuple):
+    """A mesh as its vertices ``p`` (2, n) and triangles ``t`` (3, m), the arrays of scikit-fem's
+    ``MeshTri`` and all that the norms read of one (a ``MeshTri`` serves as well): a job that only
+    evaluates norms then does not import scikit-fem, whose import is most of such a job's time."""
+
+    p: np.ndarray
+    t: np.ndarray
 
 
 def mesh_width(N: int) -> float:
@@ -33,10 +42,7 @@ def friedrichs_keller(N: int, diagonal: str = DEFAULT_DIAGONAL, jitter: float = 
     """
     from skfem import MeshTri  # here: the workflow's config checks import this module for its constants
 
-    if isinstance(N, bool) or not isinstance(N, (int, np.integer)) or N < 1:
-        raise ValueError(f"N={N!r} must be a positive integer (cells per side)")
-    if diagonal not in DIAGONALS:
-        raise ValueError(f"unknown diagonal {diagonal!r}; choose one of {DIAGONALS}")
+    _check_fk(N, diagonal)
     if not 0.0 <= jitter < 0.5:
         raise ValueError(f"jitter={jitter} must lie in [0, 0.5)")
     N = int(N)
@@ -46,6 +52,19 @@ def friedrichs_keller(N: int, diagonal: str = DEFAULT_DIAGONAL, jitter: float = 
         interior = (p[0] > 0) & (p[0] < 1) & (p[1] > 0) & (p[1] < 1)
         p[:, interior] += jitter / N * rng.uniform(-1.0, 1.0, size=(2, interior.sum()))
     return MeshTri(p, t, sort_t=False)
+
+
+def fk_triangles(N: int, diagonal: str = DEFAULT_DIAGONAL) -> Triangles:
+    """The arrays of ``friedrichs_keller(N, diagonal)`` (without jitter), without scikit-fem."""
+    _check_fk(N, diagonal)
+    return Triangles(fk_vertices(int(N)), _fk_triangles(int(N), diagonal))
+
+
+def _check_fk(N: int, diagonal: str) -> None:
+    if isinstance(N, bool) or not isinstance(N, (int, np.integer)) or N < 1:
+        raise ValueError(f"N={N!r} must be a positive integer (cells per side)")
+    if diagonal not in DIAGONALS:
+        raise ValueError(f"unknown diagonal {diagonal!r}; choose one of {DIAGONALS}")
 
 
 def fk_vertices(N: int) -> np.ndarray:

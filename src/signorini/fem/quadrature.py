@@ -18,12 +18,40 @@ TRIANGLE_RULES = ("dunavant8", "stroud4_right", "stroud4_acute1", "stroud4_acute
 
 
 def dunavant8() -> tuple[np.ndarray, np.ndarray]:
-    """Reference points (2, 16) and weights (16,) (summing to 1/2) of scikit-fem's intorder=8 rule."""
-    from skfem.quadrature import get_quadrature  # imported here: the config check imports this module
-    from skfem.refdom import RefTri
+    """Reference points (2, 16) and weights (16,) (summing to 1/2) of scikit-fem's intorder=8 rule
+    (tabulated bit for bit: ``fem.quadrature_tables``)."""
+    from signorini.fem.quadrature_tables import DUNAVANT8_POINTS, DUNAVANT8_WEIGHTS
 
-    X, W = get_quadrature(RefTri, 8)
-    return X, W
+    return _floats(DUNAVANT8_POINTS).reshape(2, -1), _floats(DUNAVANT8_WEIGHTS)
+
+
+def _floats(hexes: tuple[str, ...]) -> np.ndarray:
+    return np.array([float.fromhex(x) for x in hexes])
+
+
+def roots_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """``scipy.special.roots_legendre(n)``: tabulated for the rules the norms use (a job that
+    evaluates norms then imports neither SciPy nor scikit-fem, most of its time:
+    docs/evidence/design-measurements.md#lazy-imports), else SciPy's."""
+    from signorini.fem.quadrature_tables import LEGENDRE
+
+    if n in LEGENDRE:
+        return _floats(LEGENDRE[n][0]), _floats(LEGENDRE[n][1])
+    from scipy.special import roots_legendre as scipy_roots
+
+    return scipy_roots(n)
+
+
+def roots_jacobi01(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """``scipy.special.roots_jacobi(n, 0, 1)`` (weight 1 + x on [-1, 1]): tabulated like
+    ``roots_legendre``."""
+    from signorini.fem.quadrature_tables import JACOBI01
+
+    if n in JACOBI01:
+        return _floats(JACOBI01[n][0]), _floats(JACOBI01[n][1])
+    from scipy.special import roots_jacobi
+
+    return roots_jacobi(n, 0.0, 1.0)
 
 
 def _read_only(*arrays: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -42,9 +70,7 @@ def stroud_conical(n: int = 4) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     Jacobian, hence Gauss–Jacobi with weight ``s`` on [0, 1].  Weights sum to 1
     (multiply by twice the triangle area... by the area |T| · 2 · 1/2).
     """
-    from scipy.special import roots_jacobi, roots_legendre  # lazy: keeps the config check fast
-
-    xj, wj = roots_jacobi(n, 0.0, 1.0)  # weight (1 + x) on [-1, 1]
+    xj, wj = roots_jacobi01(n)  # weight (1 + x) on [-1, 1]
     s, ws = (xj + 1.0) / 2.0, wj / 4.0  # ∫_0^1 s g(s) ds
     xl, wl = roots_legendre(n)
     t, wt = (xl + 1.0) / 2.0, wl / 2.0
@@ -58,7 +84,5 @@ def stroud_conical(n: int = 4) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def gauss_legendre_01(n: int) -> tuple[np.ndarray, np.ndarray]:
     """n-point Gauss–Legendre rule on [0, 1] (the boundary line rule), read-only (computed once per
     process)."""
-    from scipy.special import roots_legendre
-
     x, w = roots_legendre(n)
     return _read_only((x + 1.0) / 2.0, w / 2.0)

@@ -89,3 +89,50 @@ def test_uncertainty_norm_names():
         "H12",
         "L4",
     ]
+
+
+# the norms of a job without the true maximum norms, whose polish needs scipy.optimize
+LIGHT_NORMS = [
+    "L2", "L4", "Linf", "W14", "W1inf", "H1", "H12", "L4plus", "L2boundary", "L4_true", "W14_true", "H12_true",
+]
+NORM_JOB = """
+import json, sys
+from signorini.fem.problem import Problem
+from signorini.studies.scene.norm import norms_stage
+from signorini.studies.scene.store import SceneMesh
+at = SceneMesh(json.loads(sys.argv[1]), int(sys.argv[2]), "sw_ne", json.loads(sys.argv[3]), sys.argv[4] or None)
+norms_stage(at, sys.argv[5], {n: f"{sys.argv[6]}/{n}.json" for n in json.loads(sys.argv[7])}, {})
+print(json.dumps(sorted(m for m in ("scipy", "skfem") if m in sys.modules)))
+"""
+
+
+@pytest.mark.parametrize("family", [{}, {"family": "graded", "grading": 2.0}])
+def test_a_norm_job_imports_neither_scipy_nor_scikit_fem_and_gives_the_same_bits(family, tmp_path):
+    """A norm job reads the mesh's arrays (``SceneMesh.triangles``) and the tabulated quadrature
+    rules (``fem.quadrature_tables``): its process never imports SciPy or scikit-fem, whose imports
+    were most of its time, and each value is bit for bit the one computed on scikit-fem's mesh."""
+    import json
+    import subprocess
+    import sys
+
+    from helpers import ROOT
+
+    from signorini.fem.norms.evaluate import evaluate_named_norms
+    from signorini.studies.scene.discretise import discretise_stage
+    from signorini.studies.scene.mesh import mesh_stage
+    from signorini.studies.scene.solve import solve_stage
+
+    at = SceneMesh(PROBLEM, 12, "sw_ne", family)
+    if family:
+        mesh_stage(at, tmp_path / "mesh.npz", tmp_path / "mesh.json", tmp_path / "mesh.vtu")
+        at = SceneMesh(PROBLEM, 12, "sw_ne", family, str(tmp_path / "mesh.npz"))
+    discretise_stage(at, tmp_path / "system.npz", tmp_path / "system.json")
+    solve_stage(at, tmp_path / "system.npz", "active_set", tmp_path / "solution.npz", tmp_path / "solution.json")
+    args = [json.dumps(PROBLEM), "12", json.dumps(family), at.mesh_npz or "", str(tmp_path / "solution.npz"),
+            str(tmp_path), json.dumps(LIGHT_NORMS)]
+    proc = subprocess.run([sys.executable, "-c", NORM_JOB, *args], capture_output=True, text=True, cwd=ROOT, check=True)
+    assert json.loads(proc.stdout.splitlines()[-1]) == []
+    u_h = at.solution(tmp_path / "solution.npz")["u"]
+    on_skfem_mesh = evaluate_named_norms(at.problem, at.mesh(), u_h, LIGHT_NORMS)
+    for name in LIGHT_NORMS:
+        assert json.loads((tmp_path / f"{name}.json").read_text(encoding="utf-8"))["value"] == on_skfem_mesh[name], name

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from signorini.fem.mesh import friedrichs_keller, mesh_width
+from signorini.fem.mesh import Triangles, fk_triangles, friedrichs_keller, mesh_width
 from signorini.fem.mesh_families import check_mesh_spec, mesh_from_spec, mesh_size, paper_mesh
 from signorini.fem.problem import ExactProblem, make_problem
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json, load_npz, npz_provenance
@@ -69,26 +69,40 @@ class SceneMesh:
     def h(self) -> float:
         """The ``h`` the rates are measured against: ``1/N`` on the paper's mesh (its legs), the
         longest edge on any other (``fem.mesh_families.mesh_size``)."""
-        return mesh_width(self.N) if self.paper_mesh else self._family_mesh[1]
+        return mesh_width(self.N) if self.paper_mesh else self._family[1]
 
     def mesh(self) -> MeshTri:
-        return friedrichs_keller(self.N, self.diagonal) if self.paper_mesh else self._family_mesh[0]
+        return friedrichs_keller(self.N, self.diagonal) if self.paper_mesh else self._family_mesh
+
+    def triangles(self) -> Triangles:
+        """The mesh's vertices and triangles alone (``fem.mesh.Triangles``), the same arrays as
+        ``mesh()``'s, without scikit-fem where the mesh is the paper's or read from ``mesh_npz``."""
+        return fk_triangles(self.N, self.diagonal) if self.paper_mesh else self._family[0]
 
     def build_mesh(self) -> MeshTri:
         """The mesh built from its definition (what the ``mesh`` stage writes)."""
         return mesh_from_spec(self.N, self.mesh_spec, self.diagonal)
 
     @cached_property
-    def _family_mesh(self) -> tuple[MeshTri, float]:
-        """A family mesh and its ``h``: read from ``mesh_npz`` (checked), else built."""
+    def _family(self) -> tuple[Triangles, float]:
+        """A family mesh's arrays and its ``h``: read from ``mesh_npz`` (checked), else built."""
         if self.mesh_npz is None:
-            mesh = self.build_mesh()
-            return mesh, mesh_size(mesh)
-        return load_mesh(self.mesh_npz, self.N, self.family)
+            mesh = self._family_mesh
+            return Triangles(mesh.p, mesh.t), mesh_size(mesh)
+        return load_mesh_arrays(self.mesh_npz, self.N, self.family)
+
+    @cached_property
+    def _family_mesh(self) -> MeshTri:
+        """A family mesh: built from ``mesh_npz``'s arrays, else from its definition."""
+        if self.mesh_npz is None:
+            return self.build_mesh()
+        from skfem import MeshTri
+
+        return MeshTri(*self._family[0], sort_t=False)
 
     @property
     def n_vertices(self) -> int:
-        return (self.N + 1) ** 2 if self.paper_mesh else int(self._family_mesh[0].p.shape[1])
+        return (self.N + 1) ** 2 if self.paper_mesh else int(self._family[0].p.shape[1])
 
     def solution(self, solution_npz: str | os.PathLike) -> dict[str, np.ndarray]:
         """The arrays of a solve artifact (``u``, ``lam``, ``active``), read once and checked against
@@ -117,12 +131,18 @@ def load_mesh(path: str | os.PathLike, N: int, family: str) -> tuple[MeshTri, fl
     """``(mesh, h)`` from a ``mesh`` archive, checked to hold ``family`` at ``N``."""
     from skfem import MeshTri
 
+    arrays, h = load_mesh_arrays(path, N, family)
+    return MeshTri(*arrays, sort_t=False), h
+
+
+def load_mesh_arrays(path: str | os.PathLike, N: int, family: str) -> tuple[Triangles, float]:
+    """``(Triangles(p, t), h)`` from a ``mesh`` archive, checked to hold ``family`` at ``N``."""
     d = load_npz(path)
     if int(d["N"]) != int(N) or str(d["family"]) != family:
         raise CorruptArtifactError(
             f"{path}: holds the {d['family']} mesh of N={int(d['N'])}, not the {family} mesh of N={N}"
         )
-    return MeshTri(d["p"], d["t"], sort_t=False), float(d["h"])
+    return Triangles(d["p"], d["t"]), float(d["h"])
 
 
 def load_system(path: str | os.PathLike, N: int | None = None) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
