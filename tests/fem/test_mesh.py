@@ -208,3 +208,17 @@ def test_a_triangle_not_meeting_the_disc_has_no_point_in_it(jitter, rng):
     x = np.einsum("dke,kq->deq", mesh.p[:, mesh.t], lam)
     inside = (np.hypot(x[0] - centre[0], x[1] - centre[1]) < radius).any(axis=1)
     assert np.all(keep[inside]) and 0 < keep.sum() < keep.size
+
+
+@pytest.mark.parametrize("diagonal", ["sw_ne", "nw_se"])
+def test_fk_triangles_are_the_arrays_of_the_mesh_without_scikit_fem(diagonal):
+    """``fk_triangles`` gives the vertices and triangles of ``friedrichs_keller`` (what the norms read
+    of a mesh), the same values and types, and refuses what it refuses."""
+    from signorini.fem.mesh import fk_triangles
+
+    mesh, arrays = friedrichs_keller(7, diagonal), fk_triangles(7, diagonal)
+    for ours, theirs in ((arrays.p, mesh.p), (arrays.t, mesh.t)):
+        assert ours.dtype == theirs.dtype and np.array_equal(ours, theirs)
+    for bad in ((0, diagonal), (7, "diagonal")):
+        with pytest.raises(ValueError):
+            fk_triangles(*bad)

@@ -46,7 +46,7 @@ def friedrichs_keller(N: int, diagonal: str = DEFAULT_DIAGONAL, jitter: float = 
     if not 0.0 <= jitter < 0.5:
         raise ValueError(f"jitter={jitter} must lie in [0, 0.5)")
     N = int(N)
-    p, t = fk_vertices(N), _fk_triangles(N, diagonal)
+    p, t = fk_triangles(N, diagonal)
     if jitter > 0.0:
         rng = np.random.default_rng(seed)
         interior = (p[0] > 0) & (p[0] < 1) & (p[1] > 0) & (p[1] < 1)
