@@ -256,6 +256,16 @@ def snakemake_log_files() -> list[str]:
     return [h.baseFilename for h in handlers if isinstance(h, logging.FileHandler)]
 
 
+def append_to_logs(paths: Sequence[str], text: str) -> None:
+    """``text`` appended to each log file of ``paths`` (one that cannot be written is passed over)."""
+    for path in paths:
+        try:
+            with open(path, "a", encoding="utf-8") as log:
+                log.write(text.rstrip("\n") + "\n")
+        except OSError:
+            pass
+
+
 class AfterInterrupt(logging.Handler):
     """The handler of last resort after Ctrl-C (``LogHandler.close``): each record appended to
     Snakemake's log files, none on the console."""
@@ -265,12 +275,7 @@ class AfterInterrupt(logging.Handler):
         self.paths = list(paths)
 
     def emit(self, record: logging.LogRecord) -> None:
-        for path in self.paths:
-            try:
-                with open(path, "a", encoding="utf-8") as log:
-                    log.write(record.getMessage().rstrip("\n") + "\n")
-            except OSError:
-                pass
+        append_to_logs(self.paths, record.getMessage())
 
 
 class LogHandler(LogHandlerBase):
@@ -326,9 +331,7 @@ class LogHandler(LogHandlerBase):
         if not issubclass(kind, KeyboardInterrupt):
             self.previous_excepthook(kind, value, tb)
             return
-        for path in snakemake_log_files():
-            with open(path, "a", encoding="utf-8") as log:
-                log.write("".join(traceback.format_exception(kind, value, tb)))
+        append_to_logs(snakemake_log_files(), "".join(traceback.format_exception(kind, value, tb)))
         self.interrupt()
 
     def close(self) -> None:

@@ -1,5 +1,5 @@
 """Stage ``mesh`` (``signorini.studies.scene.mesh``): a family's mesh written once, read back by the
-later stages (``store.load_mesh``) and by meshio, and the paper's mesh built where it is needed."""
+later stages (``store.load_mesh_arrays``) and by meshio, and the paper's mesh built where it is needed."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from signorini.fem.mesh_families import build_mesh, mesh_size
 from signorini.pipeline.artifacts import CorruptArtifactError, load_json
 from signorini.studies.scene.discretise import discretise_stage
 from signorini.studies.scene.mesh import mesh_stage
-from signorini.studies.scene.store import SceneMesh, load_mesh, load_system
+from signorini.studies.scene.store import SceneMesh, load_mesh_arrays, load_system
 
 DELAUNAY = {"family": "delaunay", "seed": 3}
 
@@ -23,7 +23,7 @@ def test_the_mesh_artifact_is_the_built_mesh_and_meshio_reads_it(tmp_path):
     at = SceneMesh(PROBLEM, 12, "sw_ne", DELAUNAY)
     info = mesh_stage(at, tmp_path / "mesh.npz", tmp_path / "mesh.json", tmp_path / "mesh.vtu")
     built = build_mesh("delaunay", 12, seed=3)
-    mesh, h = load_mesh(tmp_path / "mesh.npz", 12, "delaunay")
+    mesh, h = load_mesh_arrays(tmp_path / "mesh.npz", 12, "delaunay")
     np.testing.assert_array_equal(mesh.p, built.p)
     np.testing.assert_array_equal(mesh.t, built.t)
     assert h == mesh_size(built) == info["h"]
@@ -39,7 +39,7 @@ def test_the_mesh_artifact_is_the_built_mesh_and_meshio_reads_it(tmp_path):
 def test_a_mesh_of_another_family_or_size_is_refused(tmp_path):
     mesh_stage(SceneMesh(PROBLEM, 8, "sw_ne", DELAUNAY), tmp_path / "m.npz", tmp_path / "m.json", tmp_path / "m.vtu")
     with pytest.raises(CorruptArtifactError, match="not the graded mesh"):
-        load_mesh(tmp_path / "m.npz", 8, "graded")
+        load_mesh_arrays(tmp_path / "m.npz", 8, "graded")
     with pytest.raises(CorruptArtifactError, match="N=9"):
         SceneMesh(PROBLEM, 9, "sw_ne", DELAUNAY, str(tmp_path / "m.npz")).mesh()
 

@@ -2,7 +2,7 @@
 mesh family (``fem.mesh_families``), as an artifact the later stages read.
 
 Writes ``mesh.npz`` (vertices ``p``, triangles ``t``, ``N``, the family and ``h``; read back by
-``studies.scene.store.load_mesh``), ``mesh.json`` (the family and its parameters, ``h``, the
+``studies.scene.store.load_mesh_arrays``), ``mesh.json`` (the family and its parameters, ``h``, the
 sizes, the shortest and longest edge, the smallest angle, whether the problem's singular points
 are vertices, the build time) and ``mesh.vtu`` (for ParaView).  The paper's Friedrichs–Keller mesh
 needs no artifact: its two integers define it, and each stage builds it in well under the time

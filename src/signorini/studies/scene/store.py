@@ -127,14 +127,6 @@ class SceneMesh:
         return self.solution(solution_npz)["u"]
 
 
-def load_mesh(path: str | os.PathLike, N: int, family: str) -> tuple[MeshTri, float]:
-    """``(mesh, h)`` from a ``mesh`` archive, checked to hold ``family`` at ``N``."""
-    from skfem import MeshTri
-
-    arrays, h = load_mesh_arrays(path, N, family)
-    return MeshTri(*arrays, sort_t=False), h
-
-
 def load_mesh_arrays(path: str | os.PathLike, N: int, family: str) -> tuple[Triangles, float]:
     """``(Triangles(p, t), h)`` from a ``mesh`` archive, checked to hold ``family`` at ``N``."""
     d = load_npz(path)
