@@ -20,7 +20,7 @@ import numpy as np
 
 
 @numba.njit(cache=True, inline="always")
-def _point(x, y, x0, R, A, gradient):  # pragma: no cover - compiled
+def manufactured_point(x, y, x0, R, A, gradient):  # pragma: no cover - compiled
     """``(u, ∂₁u, ∂₂u)`` at one point (the derivatives 0.0 unless ``gradient``); +0.0 outside the
     support ``r < R``."""
     dx = x - x0
@@ -47,11 +47,11 @@ def _point(x, y, x0, R, A, gradient):  # pragma: no cover - compiled
 def manufactured_u(px, py, x0, R, A, u):  # pragma: no cover - compiled
     """``u`` at the points ``(px, py)`` (flat) into ``u``."""
     for i in range(px.size):
-        u[i] = _point(px[i], py[i], x0, R, A, False)[0]
+        u[i] = manufactured_point(px[i], py[i], x0, R, A, False)[0]
 
 
 @numba.njit(cache=True)
 def manufactured_u_and_grad(px, py, x0, R, A, u, gx, gy):  # pragma: no cover - compiled
     """``u`` and ``∇u = (gx, gy)`` at the points ``(px, py)`` (flat)."""
     for i in range(px.size):
-        u[i], gx[i], gy[i] = _point(px[i], py[i], x0, R, A, True)
+        u[i], gx[i], gy[i] = manufactured_point(px[i], py[i], x0, R, A, True)

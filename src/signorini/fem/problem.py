@@ -60,6 +60,11 @@ def compiled_points(enabled: bool = True) -> Iterator[None]:
         _COMPILED.reset(token)
 
 
+def compiled_points_enabled() -> bool:
+    """Whether the compiled point kernels are enabled here (``compiled_points``)."""
+    return _COMPILED.get()
+
+
 def compiled_points_for(triangles: int) -> contextlib.AbstractContextManager[None]:
     """``compiled_points`` for work over a mesh of ``triangles`` triangles: enabled from
     ``COMPILED_MIN_ELEMENTS`` on (the one place that decides)."""
@@ -75,7 +80,8 @@ class ExactProblem(Protocol):
     by which the true maxima exclude triangles), ``u`` with ``∇u`` in one evaluation, the problem
     with ``u ≡ 0`` on the same pieces (``vanishing``: the norms of a P1 function, e.g. an algebraic
     error, are its errors there), and a disc outside which ``u`` and ``f`` are exactly zero
-    (``support``: the load vector leaves out the triangles that cannot meet it)."""
+    (``support``: the load vector leaves out the triangles that cannot meet it), and the parameters of
+    compiled point kernels for ``u`` (``point_kernel``: the true norms run whole rules inside them)."""
 
     c: float
 
@@ -98,6 +104,8 @@ class ExactProblem(Protocol):
     def vanishing(self) -> ExactProblem: ...
 
     def support(self) -> tuple[np.ndarray, float] | None: ...
+
+    def point_kernel(self) -> tuple[float, ...] | None: ...
 
 
 class ProblemBase:
@@ -130,6 +138,12 @@ class ProblemBase:
     def support(self) -> tuple[np.ndarray, float] | None:
         """(centre (2,), radius) of a disc outside which ``u`` and ``f`` are exactly ``+0.0``; None:
         they may be non-zero anywhere."""
+        return None
+
+    def point_kernel(self) -> tuple[float, ...] | None:
+        """The parameters of this problem's compiled point kernels (``fem.point_kernels``), which
+        whole rules over triangles may run inside, where they are enabled (``compiled_points``); None:
+        evaluate with numpy."""
         return None
 
     @classmethod
@@ -378,6 +392,10 @@ class Problem(ProblemBase):
     def _point_parameters(self) -> tuple[float, float, float]:
         """(x0, R, A) as floats: one compiled specialisation of the kernels."""
         return float(self.x0), float(self.R), float(self.A)
+
+    def point_kernel(self) -> tuple[float, float, float] | None:
+        """(x0, R, A) of the manufactured kernels where ``compiled_points`` enables them and u ≢ 0."""
+        return self._point_parameters() if _COMPILED.get() and self.A != 0.0 else None
 
     def _compiled(self, x: np.ndarray, gradient: bool):
         """``u(x)``, or ``(u(x), ∇u(x))`` if ``gradient``, by the compiled point kernels."""

@@ -37,9 +37,9 @@ from signorini.fem.boundary import boundary_rule
 from signorini.fem.derivatives import u_and_grad_u
 from signorini.fem.mesh import triangles_meeting_disc
 from signorini.fem.norms.conventions import Conventions
-from signorini.fem.norms.families import BOUNDARY, MAX, NormDefinition, define, magnitude, part
+from signorini.fem.norms.families import BOUNDARY, MAX, PARTS, NormDefinition, define, magnitude, part
 from signorini.fem.norms.names import NormName, UnknownNormError, norm_name
-from signorini.fem.problem import Problem
+from signorini.fem.problem import Problem, compiled_points_enabled
 from signorini.fem.quadrature import dunavant8, stroud_conical
 
 # scikit-fem is slow to import (docs/evidence/design-measurements.md#lazy-imports); only type hints need it here
@@ -497,14 +497,16 @@ def evaluate_norms(
     """The named norms of ``u - u_h`` under the conventions, evaluated over chunks of triangles
     (bounded memory).  All names share the evaluations of one chunk: ``e`` and ``∇e`` at the points
     of each rule are computed once for all the norms that need them, and each value is the one the
-    name alone gives, bit for bit.  A ``_true`` name raises ``UnknownNormError``: those are
-    evaluated by ``fem.norms.true`` (``fem.norms.evaluate.evaluate_named_norms`` takes both kinds)."""
+    name alone gives, bit for bit (one p-sum alone where ``u ≡ 0`` on a large mesh by ``_p1_norms``,
+    to round-off).  A ``_true`` name raises ``UnknownNormError``: those are evaluated by
+    ``fem.norms.true`` (``fem.norms.evaluate.evaluate_named_norms`` takes both kinds)."""
     conv = conventions or Conventions()
     norms = _definitions(names, conv)
     reductions = {name: _reduction(norm) for name, norm in norms.items()}
     cell = {n: norms[n] for n, (kind, _) in reductions.items() if kind != "boundary"}
     boundary = {n: norms[n] for n, (kind, _) in reductions.items() if kind == "boundary"}
-    out: dict[str, float] = {}
+    out: dict[str, float] = _p1_norms(problem, mesh, u_h, conv, cell)
+    cell = {name: norm for name, norm in cell.items() if name not in out}
     if boundary:
         out.update(_compute(_error_field(problem, mesh, u_h, conv, {"boundary"}, None), boundary))
     acc: dict[str, list[float]] = {name: [] for name in cell}  # the value on each chunk
@@ -519,3 +521,34 @@ def evaluate_norms(
         values = np.array(acc[name])
         out[name] = float(values.max()) if kind == "max" else scaled_p_sum([values], p)
     return {name: out[name] for name in norms}
+
+
+def _p1_norms(
+    problem: Problem, mesh: MeshTri, u_h: np.ndarray, conv: Conventions, norms: dict[str, NormDefinition]
+) -> dict[str, float]:
+    """The norm of ``norms`` if it is one p-sum, ``u ≡ 0`` (the problem's ``support`` empty:
+    ``e = −u_h``, a P1 function, e.g. an algebraic error) and the compiled point kernels are enabled
+    (a large mesh): two passes of the compiled kernels ``fem.norms.kernels.p1_rule_largest`` (the
+    largest ``|part|``) and ``p1_rule_sum`` (the sum at a power of two near it), the same operations
+    per point as ``field_p_sum`` over ``error_field``, the sums in their own order.  Several norms
+    share numpy's error field instead, which costs less than two passes for each
+    (docs/evidence/design-measurements.md#compiled-norm-kernels).  Empty elsewhere."""
+    support = problem.support()
+    one_sum = len(norms) == 1 and next(iter(norms.values())).combination != MAX
+    if not (one_sum and compiled_points_enabled() and support is not None and support[1] == 0.0):
+        return {}
+    from signorini.fem.norms import kernels  # numba: only where the compiled kernels are enabled
+
+    X, W, role = _reference_rule(conv.quadrature)
+    p, t = np.ascontiguousarray(mesh.p, dtype=float), np.ascontiguousarray(mesh.t)
+    X0, X1, W = (np.ascontiguousarray(a) for a in (X[0], X[1], W))
+    mesh_v = (p[0], p[1], t, np.ascontiguousarray(u_h, dtype=float))
+    role = -1 if role is None else role
+    out = {}
+    for name, norm in norms.items():
+        power, parts = float(norm.p), np.array([PARTS.index(x) for x in norm.parts])
+        scale = _scale_of(kernels.p1_rule_largest(*mesh_v, X0, X1, role, parts))
+        p_int = int(power) if power.is_integer() else 0
+        total = kernels.p1_rule_sum(*mesh_v, X0, X1, W, role, parts, p_int, power, scale, np.empty(parts.size))
+        out[name] = total ** (1.0 / power) * scale
+    return out

@@ -56,9 +56,10 @@ import numpy as np
 
 from signorini.fem.boundary import singular_points
 from signorini.fem.derivatives import derivative_bounds, u_and_grad_u
+from signorini.fem.mesh import Triangles
 from signorini.fem.norms.conventional import ErrorField, boundary_error, boundary_norm, integer_power, power_scale
 from signorini.fem.norms.conventions import Conventions
-from signorini.fem.norms.families import BOUNDARY, MAX, VALUE_PARTS, NormDefinition, define, magnitude, part
+from signorini.fem.norms.families import BOUNDARY, MAX, PARTS, VALUE_PARTS, NormDefinition, define, magnitude, part
 from signorini.fem.norms.names import NormName, norm_name
 from signorini.fem.quadrature import gauss_legendre_01, stroud_conical
 
@@ -352,41 +353,116 @@ def _survey(problem, mesh: MeshTri, u_h: np.ndarray, gradient: bool) -> tuple[fl
         raise ValueError("the true norms handle at most one singular point")
     bounds, n_el, scales = derivative_bounds(problem), mesh.t.shape[1], []
     near, affine = np.zeros(n_el, dtype=bool), None if bounds is None else np.zeros(n_el, dtype=bool)
+    compiled = _compiled_survey(problem, mesh, u_h, gradient)
     for el in _chunks(n_el):
-        aff = _Affine.of(mesh, u_h, el)
-        e, de = aff.error(problem, aff.v.mean(axis=1)[:, :, None], gradient)
-        scales.append(power_scale(e if de is None else np.concatenate([e.ravel(), de.ravel()])))
-        r_lo, r_hi = _radii(problem, aff.v)
-        near[el] = r_lo < FAR * _diameters(aff.v)
+        if compiled is None:
+            aff = _Affine.of(mesh, u_h, el)
+            e, de = aff.error(problem, aff.v.mean(axis=1)[:, :, None], gradient)
+            scales.append(power_scale(e if de is None else np.concatenate([e.ravel(), de.ravel()])))
+            r_lo, r_hi = _radii(problem, aff.v)
+            diameter = _diameters(aff.v)
+        else:
+            largest, r_lo, r_hi, diameter = compiled(int(el[0]), el.size)
+            scales.append(power_scale(largest))
+        near[el] = r_lo < FAR * diameter
         if affine is not None:
             affine[el] = np.asarray(bounds.hessian_bound(r_lo, r_hi)) == 0.0
     return max(scales, default=1.0), near, affine
 
 
-def _integrals(problem, mesh, u_h, integrand, gradient: bool, levels, elements: np.ndarray, near, exact=None):
+def _compiled_survey(problem, mesh, u_h: np.ndarray, gradient: bool):
+    """``(start, count) ↦`` what ``_survey`` reads of the triangles ``start, …, start + count − 1``
+    (the largest ``|e|``, and ``|∂ₖe|``, at each centroid; ``_radii``; ``_diameters``), the same bits
+    in one pass of the problem's compiled kernel (``fem.norms.kernels.manufactured_survey``); None
+    where the problem has none enabled."""
+    params = problem.point_kernel()
+    if params is None:
+        return None
+    from signorini.fem.norms import kernels  # numba: only where the problem's kernel is enabled
+
+    p, t = np.ascontiguousarray(mesh.p, dtype=float), np.ascontiguousarray(mesh.t)
+    u_h = np.ascontiguousarray(u_h, dtype=float)
+
+    def survey(start: int, count: int) -> tuple[np.ndarray, ...]:
+        out = tuple(np.empty(count) for _ in range(4))
+        kernels.manufactured_survey(p[0], p[1], t, start, u_h, *params, EXACT_DISTANCE, gradient, *out)
+        return out
+
+    return survey
+
+
+@dataclass(frozen=True)
+class _CompiledRule:
+    """The plain rule of ``_rule_integrals`` on the triangles of a mesh, in the problem's compiled point
+    kernel (``ExactProblem.point_kernel``; ``fem.norms.kernels.manufactured_rule_integrals``): one
+    pass over the points of each triangle, no arrays of them.  The same operations per point; the sum
+    over a triangle's points runs in order where numpy's matrix–vector product takes its own (the
+    integrals agree to round-off, ``docs/evidence/design-measurements.md#compiled-norm-kernels``)."""
+
+    mesh: Triangles
+    u_h: np.ndarray
+    params: tuple[float, ...]
+    scale: float
+    parts: np.ndarray
+    q: float
+    gradient: bool
+
+    @classmethod
+    def of(cls, problem, mesh, u_h: np.ndarray, norm: NormDefinition, scale: float) -> _CompiledRule | None:
+        """The compiled rule of ``norm``'s integrand ``(e / scale, ∇e / scale)``, or None where the
+        problem has no compiled kernel enabled."""
+        params = problem.point_kernel()
+        if params is None:
+            return None
+        triangles = Triangles(np.ascontiguousarray(mesh.p, dtype=float), np.ascontiguousarray(mesh.t))
+        parts = np.array([PARTS.index(name) for name in norm.parts], dtype=np.int64)
+        return cls(triangles, np.ascontiguousarray(u_h), params, scale, parts, norm.p / 2.0, norm.needs_gradient)
+
+    def integrals(self, elements: np.ndarray, n: int) -> np.ndarray:
+        """The n × n conical rule's integral over each of ``elements``."""
+        from signorini.fem.norms import kernels  # numba: only where the problem's kernel is enabled
+
+        s, t, w = stroud_conical(n)
+        q_int = int(self.q) if float(self.q).is_integer() and self.q >= 1 else 0
+        out = np.empty(elements.size)
+        kernels.manufactured_rule_integrals(
+            self.mesh.p[0], self.mesh.p[1], self.mesh.t, np.ascontiguousarray(elements), self.u_h,
+            np.ascontiguousarray(s * (1.0 - t)), np.ascontiguousarray(s * t), np.ascontiguousarray(w),
+            *self.params, self.scale, self.parts, q_int, self.q, self.gradient, out,
+        )  # fmt: skip
+        return out
+
+
+def _integrals(
+    problem, mesh, u_h, integrand, gradient: bool, levels, elements: np.ndarray, near, exact=None, compiled=None
+):
     """∫ over each of ``elements`` (k,) at each of ``levels`` (R, k): the conical rule of
-    ``INTEGRAL_LEVELS``, or the graded rule of ``near`` (``NEAR_LEVELS``) for the elements near the
-    singular point, or (R equal rows) the closed form of ``exact`` = (``_affine_rule``, the mask of
-    ``_survey``) on the elements where u is affine."""
+    ``INTEGRAL_LEVELS`` (``compiled``: in the problem's kernel, ``_CompiledRule``), or the graded rule
+    of ``near`` (``NEAR_LEVELS``) for the elements near the singular point, or (R equal rows) the
+    closed form of ``exact`` = (``_affine_rule``, the mask of ``_survey``) on the elements where u is
+    affine."""
     out = np.empty((len(levels), elements.size))
     near_values = None
     if near is not None and near.mask[elements].any():
         near_values = [near.integrals(problem, integrand, gradient, NEAR_LEVELS[k]) for k in levels]
     for chunk in _chunks(elements.size):
         el = elements[chunk]
-        aff = _Affine.of(mesh, u_h, el)
-        v = aff.v
         is_near = np.zeros(el.size, dtype=bool) if near is None else near.mask[el]
         affine = np.zeros(el.size, dtype=bool)
         if exact is not None:
             rule, affine_mask = exact
             affine = ~is_near & affine_mask[el]
             if affine.any():
-                out[:, chunk[affine]] = rule(problem, aff.take(affine))
+                out[:, chunk[affine]] = rule(problem, _Affine.of(mesh, u_h, el[affine]))
         plain = ~(is_near | affine)
-        plain_at, plain_aff, plain_v = chunk[plain], aff.take(plain), v[:, :, plain]
+        plain_at = chunk[plain]
+        plain_aff = None if compiled is not None else _Affine.of(mesh, u_h, el[plain])
         for i, k in enumerate(levels):
-            out[i, plain_at] = _rule_integrals(problem, plain_aff, integrand, gradient, INTEGRAL_LEVELS[k], plain_v)
+            n = INTEGRAL_LEVELS[k]
+            if compiled is not None:
+                out[i, plain_at] = compiled.integrals(el[plain], n)
+            else:
+                out[i, plain_at] = _rule_integrals(problem, plain_aff, integrand, gradient, n, plain_aff.v)
             if is_near.any():
                 out[i, chunk[is_near]] = near_values[i][np.searchsorted(near.elements, el[is_near])]
     return out
@@ -436,10 +512,11 @@ def _integral_norm(problem, mesh, u_h, norm: NormDefinition, rtol: float) -> Tru
     near, n_el, p = _NearField.of(problem, mesh, u_h, near_mask), mesh.t.shape[1], norm.p
     rule = None if affine_mask is None else _affine_rule(norm, plain, scale)
     exact = None if rule is None else (rule, affine_mask)
+    compiled = _CompiledRule.of(problem, mesh, u_h, norm, scale)
     value, diff, lower = np.empty(n_el), np.empty(n_el), 0.0
     for block in range(0, n_el, 64 * CHUNK):  # blocks bound the memory of the two rules' values
         el = np.arange(block, min(n_el, block + 64 * CHUNK))
-        both = _integrals(problem, mesh, u_h, integrand, gradient, (0, 1), el, near, exact)
+        both = _integrals(problem, mesh, u_h, integrand, gradient, (0, 1), el, near, exact, compiled)
         value[el], diff[el], lower = both[1], np.abs(both[1] - both[0]), lower + float(both[0].sum())
     rule = np.zeros(n_el, dtype=np.int8)
     levels = [_integral_level(0, lower, np.inf, p, scale, rule, near, n_el)]
@@ -453,7 +530,7 @@ def _integral_norm(problem, mesh, u_h, norm: NormDefinition, rtol: float) -> Tru
             break
         for k in np.unique(rule[pick]):
             el = pick[rule[pick] == k]
-            new = _integrals(problem, mesh, u_h, integrand, gradient, (k + 1,), el, near)[0]
+            new = _integrals(problem, mesh, u_h, integrand, gradient, (k + 1,), el, near, compiled=compiled)[0]
             diff[el], value[el], rule[el] = np.abs(new - value[el]), new, k + 1
         levels.append(_integral_level(level, float(value.sum()), float(diff.sum()), p, scale, rule, near, pick.size))
     last = levels[-1]
