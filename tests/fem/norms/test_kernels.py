@@ -1,8 +1,8 @@
 """The compiled kernels of the norms against the numpy code they replace: the true norms' survey
 bit for bit, their rules over triangles to round-off and whole true norms to round-off with the same
-refinement; a P1 function's norms under the conventions to round-off, for every rule placement,
-norm family and form, on the paper's, graded, Delaunay and clockwise meshes; and where each is
-taken."""
+refinement; a P1 function's norms under the conventions to round-off (its maxima to the bit), for
+every rule placement, point set, norm family and form, on the paper's, graded, Delaunay and
+clockwise meshes; and where each is taken."""
 
 from __future__ import annotations
 
@@ -145,7 +145,7 @@ def test_a_p1_function_s_norm_by_the_kernels_agrees_with_numpy_to_round_off(quad
             assert got[name] == pytest.approx(expected[name], rel=1e-13)
 
 
-def test_the_p1_kernels_take_one_p_sum_of_a_vanishing_u_on_large_meshes_only():
+def test_the_p1_kernels_take_one_norm_of_a_vanishing_u_on_large_meshes_only():
     mesh, conv = friedrichs_keller(8), Conventions()
     P, v = Problem(), np.linspace(0.0, 1e-12, friedrichs_keller(8).p.shape[1])
     one = {"L4": define("L4", conv)}
@@ -153,7 +153,7 @@ def test_the_p1_kernels_take_one_p_sum_of_a_vanishing_u_on_large_meshes_only():
     with compiled_points():
         assert conventional._p1_norms(P.vanishing(), mesh, v, conv, one).keys() == {"L4"}
         assert conventional._p1_norms(P, mesh, v, conv, one) == {}  # u ≢ 0
-        assert conventional._p1_norms(P.vanishing(), mesh, v, conv, {"Linf": define("Linf", conv)}) == {}
+        assert conventional._p1_norms(P.vanishing(), mesh, v, conv, {"Linf": define("Linf", conv)}).keys() == {"Linf"}
         two = one | {"W14": define("W14", conv)}  # several share numpy's error field
         assert conventional._p1_norms(P.vanishing(), mesh, v, conv, two) == {}
         inside = (
@@ -163,3 +163,18 @@ def test_the_p1_kernels_take_one_p_sum_of_a_vanishing_u_on_large_meshes_only():
     with compiled_points():
         assert inside[0] == conventional._p1_norms(P.vanishing(), mesh, v, conv, one)  # the kernels' value
     assert inside[1] == conventional.evaluate_norms(P.vanishing(), mesh, v, ["L4", "W14"], conv)  # numpy's bits
+
+
+@pytest.mark.parametrize("points", ["vertices", "midpoints", "quadrature", "all"])
+@pytest.mark.parametrize("quadrature", ["stroud4_right", "stroud4_acute2", "dunavant8"])
+def test_a_p1_function_s_maxima_by_the_kernels_are_numpys(points, quadrature):
+    zero = Problem().vanishing()
+    for form in ("components", "gradient", "seminorm"):
+        conv = Conventions(quadrature=quadrature, linf_points=points, w1inf_points=points, w1p_form=form)
+        for mesh in [*_meshes(), _clockwise(friedrichs_keller(12))]:
+            v = 1e-15 * np.sin(7.0 * mesh.p[0] - 4.0 * mesh.p[1]) + 3e-16 * np.cos(11.0 * mesh.p[1])
+            for name in ("Linf", "Linfplus", "Linfminus", "W1inf"):
+                with compiled_points():
+                    got = conventional._p1_norms(zero, mesh, v, conv, {name: define(name, conv)})
+                expected = conventional.evaluate_norms(zero, mesh, v, [name], conv)
+                assert got[name] == pytest.approx(expected[name], rel=1e-15)

@@ -526,29 +526,40 @@ def evaluate_norms(
 def _p1_norms(
     problem: Problem, mesh: MeshTri, u_h: np.ndarray, conv: Conventions, norms: dict[str, NormDefinition]
 ) -> dict[str, float]:
-    """The norm of ``norms`` if it is one p-sum, ``u ≡ 0`` (the problem's ``support`` empty:
+    """The norm of ``norms`` if it is one norm on Ω, ``u ≡ 0`` (the problem's ``support`` empty:
     ``e = −u_h``, a P1 function, e.g. an algebraic error) and the compiled point kernels are enabled
-    (a large mesh): two passes of the compiled kernels ``fem.norms.kernels.p1_rule_largest`` (the
-    largest ``|part|``) and ``p1_rule_sum`` (the sum at a power of two near it), the same operations
-    per point as ``field_p_sum`` over ``error_field``, the sums in their own order.  Several norms
-    share numpy's error field instead, which costs less than two passes for each
+    (a large mesh), by the compiled kernels of ``fem.norms.kernels``: a maximum in one pass of
+    ``p1_rule_largest`` over each part of its point set, a p-sum in two (the largest ``|part|``,
+    then ``p1_rule_sum`` at a power of two near it); the same operations per point as
+    ``error_field`` and ``field_norm``, the sums in their own order.  Several norms share numpy's
+    error field instead, which costs less than two passes for each
     (docs/evidence/design-measurements.md#compiled-norm-kernels).  Empty elsewhere."""
     support = problem.support()
-    one_sum = len(norms) == 1 and next(iter(norms.values())).combination != MAX
-    if not (one_sum and compiled_points_enabled() and support is not None and support[1] == 0.0):
+    if not (len(norms) == 1 and compiled_points_enabled() and support is not None and support[1] == 0.0):
         return {}
     from signorini.fem.norms import kernels  # numba: only where the compiled kernels are enabled
 
+    ((name, norm),) = norms.items()
     X, W, role = _reference_rule(conv.quadrature)
     p, t = np.ascontiguousarray(mesh.p, dtype=float), np.ascontiguousarray(mesh.t)
-    X0, X1, W = (np.ascontiguousarray(a) for a in (X[0], X[1], W))
     mesh_v = (p[0], p[1], t, np.ascontiguousarray(u_h, dtype=float))
-    role = -1 if role is None else role
-    out = {}
-    for name, norm in norms.items():
-        power, parts = float(norm.p), np.array([PARTS.index(x) for x in norm.parts])
-        scale = _scale_of(kernels.p1_rule_largest(*mesh_v, X0, X1, role, parts))
-        p_int = int(power) if power.is_integer() else 0
-        total = kernels.p1_rule_sum(*mesh_v, X0, X1, W, role, parts, p_int, power, scale, np.empty(parts.size))
-        out[name] = total ** (1.0 / power) * scale
-    return out
+    parts = np.array([PARTS.index(x) for x in norm.parts])
+
+    def largest(points: np.ndarray, placed: int | None) -> float:
+        X0, X1 = np.ascontiguousarray(points[0]), np.ascontiguousarray(points[1])
+        return kernels.p1_rule_largest(*mesh_v, X0, X1, -1 if placed is None else placed, parts)
+
+    if norm.combination == MAX:  # the point set of the conventions' field: element points, the rule's or both
+        which = getattr(conv, norm.points)
+        sets = ([] if which == "quadrature" else [(element_points(which), None)]) + (
+            [(X, role)] if which in ("quadrature", "all") else []
+        )
+        return {name: max(largest(points, placed) for points, placed in sets)}
+    power = float(norm.p)
+    scale = _scale_of(largest(X, role))
+    p_int = int(power) if power.is_integer() else 0
+    rule = (np.ascontiguousarray(X[0]), np.ascontiguousarray(X[1]), np.ascontiguousarray(W))
+    total = kernels.p1_rule_sum(
+        *mesh_v, *rule, -1 if role is None else role, parts, p_int, power, scale, np.empty(parts.size)
+    )
+    return {name: total ** (1.0 / power) * scale}
