@@ -557,9 +557,9 @@ def _p1_norms(
         return {name: max(largest(points, placed) for points, placed in sets)}
     power = float(norm.p)
     scale = _scale_of(largest(X, role))
-    p_int = int(power) if power.is_integer() else 0
-    rule = (np.ascontiguousarray(X[0]), np.ascontiguousarray(X[1]), np.ascontiguousarray(W))
+    X0, X1, weights = (np.ascontiguousarray(a) for a in (X[0], X[1], W))
+    placed = -1 if role is None else role
     total = kernels.p1_rule_sum(
-        *mesh_v, *rule, -1 if role is None else role, parts, p_int, power, scale, np.empty(parts.size)
+        *mesh_v, X0, X1, weights, placed, parts, kernels.squarings(power), power, scale, np.empty(parts.size)
     )
     return {name: total ** (1.0 / power) * scale}

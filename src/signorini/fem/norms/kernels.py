@@ -70,6 +70,25 @@ def _magnitude(code, e, g0, g1):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, inline="always")
+def _squared(code, e, g0, g1):  # pragma: no cover - compiled
+    """The squared magnitude of a part, as ``fem.norms.true._squared`` forms it: ``x · x`` of the
+    part's value, ``g0² + g1²`` for ``|∇e|``."""
+    if code == PART_GRAD:
+        return g0 * g0 + g1 * g1
+    if code == PART_E:
+        v = e
+    elif code == PART_E_PLUS:
+        v = max(e, 0.0)
+    elif code == PART_E_MINUS:
+        v = max(-e, 0.0)
+    elif code == PART_D1:
+        v = g0
+    else:
+        v = g1
+    return v * v
+
+
+@numba.njit(cache=True, inline="always")
 def _power(s, p_int, p):  # pragma: no cover - compiled
     """``s^p``: for a positive integer ``p_int = p`` the product of the squarings of ``s`` at its set
     bits, in increasing order, as ``fem.norms.conventional.integer_power`` forms it (``1.0 · x`` is
@@ -87,14 +106,29 @@ def _power(s, p_int, p):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, inline="always")
-def _p1_triangle(px, py, t, v, el, role):  # pragma: no cover - compiled
-    """Triangle ``el``'s vertices in the rule's order, ``|det J|`` and ``∇e = −∇v`` (``p1_at_points``)."""
-    a, b, c = _rolled(px, py, t, el, role)
+def _affine(px, py, v, a, b, c):  # pragma: no cover - compiled
+    """The affine map of the triangle ``(a, b, c)``, ``J = [[j00, j01], [j10, j11]]``, its ``det J``
+    and the gradient ``(g0, g1)`` of the P1 function ``v`` on it, as ``p1_at_points`` and
+    ``fem.norms.true._Affine.of`` compute them."""
     j00, j01 = px[b] - px[a], px[c] - px[a]
     j10, j11 = py[b] - py[a], py[c] - py[a]
     det = j00 * j11 - j01 * j10
     d1, d2 = v[b] - v[a], v[c] - v[a]
-    return a, b, c, abs(det), -((j11 * d1 - j10 * d2) / det), -((-j01 * d1 + j00 * d2) / det)
+    return j00, j01, j10, j11, det, (j11 * d1 - j10 * d2) / det, (-j01 * d1 + j00 * d2) / det
+
+
+def squarings(p: float) -> int:
+    """The ``p_int`` of ``_power`` for the exponent ``p``: ``p`` itself where ``integer_power`` forms
+    the power by squarings (a positive integer), else 0 (pow)."""
+    return int(p) if float(p).is_integer() and p >= 1 else 0
+
+
+@numba.njit(cache=True, inline="always")
+def _p1_triangle(px, py, t, v, el, role):  # pragma: no cover - compiled
+    """Triangle ``el``'s vertices in the rule's order, ``|det J|`` and ``∇e = −∇v`` (``p1_at_points``)."""
+    a, b, c = _rolled(px, py, t, el, role)
+    _, _, _, _, det, g0, g1 = _affine(px, py, v, a, b, c)
+    return a, b, c, abs(det), -g0, -g1
 
 
 @numba.njit(cache=True)
@@ -154,14 +188,8 @@ def manufactured_rule_integrals(
     for k in range(elements.size):
         el = elements[k]
         a, b, c = t[0, el], t[1, el], t[2, el]
-        v0x, v0y = px[a], py[a]
-        j00, j01 = px[b] - v0x, px[c] - v0x
-        j10, j11 = py[b] - v0y, py[c] - v0y
-        det = j00 * j11 - j01 * j10
-        d1, d2 = u_h[b] - u_h[a], u_h[c] - u_h[a]
-        g0 = (j11 * d1 - j10 * d2) / det
-        g1 = (-j01 * d1 + j00 * d2) / det
-        u0 = u_h[a]
+        v0x, v0y, u0 = px[a], py[a], u_h[a]
+        j00, j01, j10, j11, det, g0, g1 = _affine(px, py, u_h, a, b, c)
         acc = 0.0
         for i in range(w.size):
             x = v0x + (j00 * X0[i] + j01 * X1[i])
@@ -173,22 +201,7 @@ def manufactured_rule_integrals(
             e1 = (uy - g1) * inverse
             total = 0.0
             for j in range(parts.size):
-                code = parts[j]
-                if code == PART_GRAD:
-                    s = e0 * e0 + e1 * e1
-                else:
-                    if code == PART_E:
-                        v = e
-                    elif code == PART_E_PLUS:
-                        v = max(e, 0.0)
-                    elif code == PART_E_MINUS:
-                        v = max(-e, 0.0)
-                    elif code == PART_D1:
-                        v = e0
-                    else:
-                        v = e1
-                    s = v * v
-                term = _power(s, q_int, q)
+                term = _power(_squared(parts[j], e, e0, e1), q_int, q)
                 total = term if j == 0 else total + term
             acc += total * w[i]
         out[k] = acc * (abs(det) / 2.0)
@@ -216,12 +229,7 @@ def manufactured_survey(
         a, b, c = t[0, el], t[1, el], t[2, el]
         vx = (px[a], px[b], px[c])
         vy = (py[a], py[b], py[c])
-        j00, j01 = vx[1] - vx[0], vx[2] - vx[0]
-        j10, j11 = vy[1] - vy[0], vy[2] - vy[0]
-        det = j00 * j11 - j01 * j10
-        d1, d2 = u_h[b] - u_h[a], u_h[c] - u_h[a]
-        g0 = (j11 * d1 - j10 * d2) / det
-        g1 = (-j01 * d1 + j00 * d2) / det
+        _, _, _, _, _, g0, g1 = _affine(px, py, u_h, a, b, c)
         cx = (vx[0] + vx[1] + vx[2]) / 3.0
         cy = (vy[0] + vy[1] + vy[2]) / 3.0
         uh = u_h[a] + g0 * (cx - vx[0]) + g1 * (cy - vy[0])

@@ -423,12 +423,11 @@ class _CompiledRule:
         from signorini.fem.norms import kernels  # numba: only where the problem's kernel is enabled
 
         s, t, w = stroud_conical(n)
-        q_int = int(self.q) if float(self.q).is_integer() and self.q >= 1 else 0
         out = np.empty(elements.size)
         kernels.manufactured_rule_integrals(
             self.mesh.p[0], self.mesh.p[1], self.mesh.t, np.ascontiguousarray(elements), self.u_h,
             np.ascontiguousarray(s * (1.0 - t)), np.ascontiguousarray(s * t), np.ascontiguousarray(w),
-            *self.params, self.scale, self.parts, q_int, self.q, self.gradient, out,
+            *self.params, self.scale, self.parts, kernels.squarings(self.q), self.q, self.gradient, out,
         )  # fmt: skip
         return out
 
