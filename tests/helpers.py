@@ -147,6 +147,13 @@ TEST_SCENES = {
         "problem": PROBLEM,
         "norm_jobs": "per_mesh",
     },
+    "finest": {  # Table 2 one mesh further (shipped: N = 2001, 4001, 8001 and three of its norms)
+        "N": [9, 17],
+        "norms": ["L4", "W14", "H12", "L4_true", "W14_true", "H12_true"],
+        "solver": "active_set",
+        "problem": PROBLEM,
+        "norm_jobs": "per_mesh",
+    },
     "work_precision": {
         "N": [11, 21],
         "norms": ["L4", "W14"],
@@ -232,6 +239,7 @@ BUILT_TARGETS = (
     "results/case2/eoc.csv",
     "true_norms",
     "fine",
+    "finest",
     "meshes",
 )
 

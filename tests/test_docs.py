@@ -169,7 +169,7 @@ GLOSSARY_TERMS = (
     "vs_expected", "vs_reference", "quasi_uniform", "mesh", "friedrichs_keller", "union_jack", "graded", "delaunay",
     # the workflow
     "scene_defaults", "figures_scene", "norm_jobs", "per_norm", "per_mesh", "solver_options", "paper", "smoke",
-    "case2", "fine", "theory", "work_precision", "stability",
+    "case2", "fine", "finest", "theory", "work_precision", "stability",
 )
 
 

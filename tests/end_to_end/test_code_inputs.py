@@ -120,16 +120,19 @@ def edit_matrix(built_repo, tmp_path_factory):
     return repo, runs | dry_runs(repo, edited)
 
 
-def script_of(repo: Path, rule: str) -> Path:
-    """A rule's script: its own name's, and norm.py for a scene's per-mesh norms rule (norms_<scene>)."""
-    return repo / "workflow/scripts" / f"{'norm' if rule.startswith('norms_') else rule}.py"
+def script_of(repo: Path, job: dict) -> Path:
+    """A job's script: the one of ``workflow/scripts/`` among its inputs (a scene's per-mesh norms rule
+    runs norm.py, the finest scene's tables fine_tables.py)."""
+    (script,) = [p for p in job["input"] if p.startswith("workflow/scripts/")]
+    return repo / script
 
 
 def closures(repo: Path, dag: list[dict]) -> dict[str, set[str]]:
     """The import closure of each rule's script, relative to ``repo``."""
+    scripts = {job["rule"]: script_of(repo, job) for job in dag if job["rule"] not in AGGREGATES}
     return {
-        rule: {p.relative_to(repo).as_posix() for p in import_closure(script_of(repo, rule), repo / "src")}
-        for rule in {job["rule"] for job in dag} - AGGREGATES
+        rule: {p.relative_to(repo).as_posix() for p in import_closure(script, repo / "src")}
+        for rule, script in scripts.items()
     }
 
 
@@ -220,7 +223,7 @@ def test_jobs_ran_only_modules_they_declare(edit_matrix):
         lines = [ln for ln in (repo / job["log"][0]).read_text().splitlines() if "modules run:" in ln]
         assert lines, f"{job['log'][0]}: no modules line"
         loaded = lines[-1].split("modules run: ", 1)[1].split()
-        script = script_of(repo, job["rule"])
+        script = script_of(repo, job)
         declared = {
             ".".join(p.relative_to(repo / "src").with_suffix("").parts).removesuffix(".__init__")
             for p in import_closure(script, repo / "src")

@@ -26,6 +26,7 @@ CATEGORIES = {
     "stability": "Stability",
     "true_norms": "Paper",
     "fine": "Theory",
+    "finest": "Theory",
     "meshes": "Theory",
 }
 RULE_CATEGORIES = {"summary": "Findings"}  # a rule whose outputs the report files apart from its target's

@@ -70,14 +70,15 @@ def test_a_request_larger_than_the_node_is_refused_before_submission(cluster, tm
     for key, value in cluster.items():
         monkeypatch.setenv(key, value)
     repo = copy_repo(tmp_path)
-    # a solve that needs 0.5 GB less than the machine has (the check while parsing passes) and
-    # 0.5 GB more than the node
+    # a solve that needs 0.5 GB less than the machine has (this machine would run it) and 0.5 GB
+    # more than the node
     base, per = MEM_MB["solve"]
     N = math.isqrt((machine_mem_mb() - 512 - base) * per)
     assert largest_job(N)[0] == "solve"
     scene = {**_smoke_config([])["scenes"]["smoke"], "N": [11, N]}
     (repo / "big.yaml").write_text(yaml.safe_dump({"scenes": {"big": scene}}))
-    proc = snakemake(repo, "results/smoke/N11/system.npz", *SLURM, "--configfile", "big.yaml", check=False)
+    # the memory of the meshes a run needs is checked on its plan: the big mesh's solve
+    proc = snakemake(repo, f"results/big/N{N}/solution.npz", *SLURM, "--configfile", "big.yaml", check=False)
     out = proc.stdout + proc.stderr
     assert proc.returncode != 0
     assert f"scenes.big.N[1]: N = {N} needs about" in out

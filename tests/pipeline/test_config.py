@@ -378,6 +378,44 @@ def test_a_mesh_that_cannot_fit_is_refused_before_any_job(N, limit, message):
         check_config(config, limit)
 
 
+class _Job:
+    """What ``check_planned_memory`` reads of a Snakemake job: its wildcards."""
+
+    def __init__(self, **wildcards):
+        self.wildcards = wildcards
+
+
+def test_a_run_checks_the_memory_of_the_meshes_it_needs_and_of_no_others():
+    """A scene that needs more memory than this machine has (``finest``) keeps no other target from
+    running: the workflow leaves the meshes' memory out of the config check and checks the plan."""
+    from signorini.pipeline.config import check_planned_memory
+
+    config = load_config(ROOT / "workflow/config.yaml")
+    config = {"figures_scene": "smoke", "scenes": {"smoke": config["scenes"]["smoke"],
+                                                    "big": {**config["scenes"]["smoke"], "N": [11, 30_000]}}}
+    with pytest.raises(ConfigError, match=r"scenes\.big\.N\[1\]: N = 30000 needs about"):
+        check_config(copy.deepcopy(config), 4000)
+    check_config(config, 4000, memory=False)
+    small = [_Job(scene="smoke", N="11"), _Job(scene="smoke", N="21"), _Job(scene="big", N="11"), _Job(case="c")]
+    check_planned_memory(small, config, 4000)
+    # not a mesh of the scene (a target's file under another N): no estimate, Snakemake's own request
+    check_planned_memory([*small, _Job(scene="big", N="29999")], config, 4000)
+    with pytest.raises(ConfigError, match=r"^scenes\.big\.N\[1\]: N = 30000 needs about .* more than the 3\.9 GB "
+                       r"available$"):
+        check_planned_memory([*small, _Job(scene="big", N="30000", norm="L4")], config, 4000)
+
+
+def test_a_mesh_beyond_the_memory_is_refused_only_when_a_target_needs_it(tmp_path):
+    """End to end: the shipped scene ``finest`` (N = 8001, about 21 GB per job) under a memory limit of
+    8 GB: a dry run of another target passes, one of ``finest`` is refused in one line."""
+    copy_repo(tmp_path)
+    proc = snakemake(tmp_path, "-n", "results/smoke/N11/system.npz", "--resources", "mem_mb=8000", timeout=120)
+    assert "config error" not in proc.stdout + proc.stderr
+    proc = snakemake(tmp_path, "-n", "finest", "--resources", "mem_mb=8000", check=False, timeout=120)
+    assert proc.returncode != 0
+    assert "config error: scenes.finest.N[2]: N = 8001 needs about 21.3 GB for its solve_multigrid job" in proc.stderr
+
+
 def test_a_yaml_syntax_error_is_named_with_file_and_line(tmp_path, monkeypatch, capsys):
     """Snakemake says only that a config file is not valid YAML; the Snakefile checks the shipped
     config first, and ``python -m signorini.pipeline.config`` a file given with ``--configfile``."""

@@ -14,7 +14,7 @@ from signorini.studies.paper.reference import read_table_csv
 
 ROOT = Path(__file__).resolve().parents[2]
 FIG = "paper_figures"
-TRUE, FINE = f"{FIG}/table1_true.csv", f"{FIG}/table1_fine.csv"
+TRUE, FINE, FINEST = f"{FIG}/table1_true.csv", f"{FIG}/table1_fine.csv", f"{FIG}/table1_finest.csv"
 
 
 @pytest.fixture(scope="module")
@@ -63,7 +63,31 @@ def test_rates_numbers_match_table2_fine(cells):
     h = 1.0 / rows["N"].to_numpy(float)
     beta = np.polyfit(np.log(-np.log(h)), np.log(rows["true"].to_numpy()) - 1.5 * np.log(h), 1)[0]
     assert f"β = {beta:.2f}" in h12.text
+    trend = ", ".join(f"{fine.loc[f'1/{N}', 'H12_true']:.4f}" for N in (1001, 2001, 4001))
+    assert f"the EOCs from h = 1/1001 to 1/4001: {trend}" in h12.text
 
+
+def test_the_finest_meshes_carry_the_h12_trend_one_mesh_further():
+    """With ``table1_finest.csv`` the H^{1/2} finding is at h = 1/8001 and lists four EOCs from 1/1001,
+    the last those of ``table2_finest.csv``; the norms on fewer meshes keep h = 1/4001."""
+    found = sm.rate_findings(sm._true_cells(TRUE, FINE, FINEST), ())
+    finest = pd.read_csv(f"{FIG}/table2_finest.csv").set_index("h")
+    h12 = found[-1].text
+    assert h12.startswith(f"H^{{1/2}}(∂Ω): EOC {finest.loc['1/8001', 'H12_true']:.3f} at h = 1/8001")
+    assert "to 1/8001: " in h12 and h12.count(", 1.4") >= 3
+    assert found[0].text.startswith("at h = 1/8001") and "L¹⁶(Ω) 1.624 (h = 1/4001)" in found[0].text
+
+
+def test_a_norm_on_fewer_meshes_is_named_with_its_own_finest_mesh(cells):
+    """One mesh further for L⁴ alone (as the scene ``finest`` adds three norms at h = 1/8001): the
+    finding is at h = 1/8001, and the norms whose finest mesh is h = 1/4001 say so."""
+    last = cells[(cells["norm"] == "L4") & (cells["N"] == 4001)].iloc[0]
+    further = last.copy()
+    further["N"], further["h"], further["true"] = 8001, 1 / 8001, last["true"] * (4001 / 8001) ** 2
+    found = sm.rate_findings(pd.concat([cells, further.to_frame().T], ignore_index=True), ())
+    assert found[0].text.startswith("at h = 1/8001 the EOCs")
+    assert "L⁴(Ω) 2.000," in found[0].text and "L¹⁶(Ω) 1.624 (h = 1/4001)" in found[0].text
+    assert "H^{1/2}" not in found[0].text and "at h = 1/4001" in found[-1].text
 
 def test_a_rate_off_its_order_is_listed_apart(cells):
     moved = cells.copy()
@@ -142,12 +166,12 @@ def test_every_committed_finding_regenerates_from_the_committed_files():
         "work_precision": f"{FIG}/work_precision.csv",
         "stability": f"{FIG}/stability.csv",
     }
-    cells = sm._true_cells(TRUE, FINE)
+    cells = sm._true_cells(TRUE, FINE, FINEST)
     ours, paper = read_table_csv(f"{FIG}/table1.csv"), read_table_csv(REFERENCES["paper_table1"])
     found = [
         *sm.point_set_findings(cells, (TRUE, FINE)),
         *sm.l16_findings(cells, (TRUE, FINE)),
-        *sm.rate_findings(cells, (TRUE, FINE)),
+        *sm.rate_findings(cells, (TRUE, FINE, FINEST)),
         *sm.contact_findings(sources),
         *sm.race_findings(sources),
         *sm.stability_findings(sources["stability"], (sources["stability"],)),

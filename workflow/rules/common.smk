@@ -73,7 +73,8 @@ with one_line_errors(stab_atlas.AtlasConfigError, wp_study.StudyConfigError):
     check_cores(
         workflow.resource_settings.cores, workflow.global_resources["_nodes"].value
     )
-    check_config(config, _mem_limit)
+    # the meshes' memory: on the plan of the requested targets (integrity.smk)
+    check_config(config, memory=False)
     stab_atlas.check_atlases(config)
     for _name, _scene in config["scenes"].items():
         if "study" in _scene:
@@ -83,12 +84,12 @@ with one_line_errors(stab_atlas.AtlasConfigError, wp_study.StudyConfigError):
 patches.bound_scheduler_memory(workflow, resources.usable_memory(per_process=False).mb)
 
 
-# Through Slurm, every scene job's memory and run-time request must fit the largest node of the
-# partition and its time limit, and a group job's CPUs (--cores) the node: refused before the
-# first submission, not left pending for ever.
+# Through Slurm, every scene job's run-time request must fit the time limit of the partition, and
+# a group job's CPUs (--cores) its largest node: refused before the first submission, not left
+# pending for ever (the memory of the jobs this run needs: check_plan, integrity.smk).
 onstart:
     if (node := slurm_node(workflow)) is not None:
-        check_config(config, _mem_limit, node=node)
+        check_config(config, _mem_limit, node=node, memory=False)
 
 
 wildcard_constraints:
@@ -116,6 +117,7 @@ FIG = config["figures_scene"]  # the scene paper_figures/ is rendered from
 MESH_GROUP = "mesh"
 THEORY = paths.THEORY_SCENE  # the scene rendered into paper_figures/theory*
 FINE = "fine"  # the scene rendered into paper_figures/table{1,2}_fine.*
+FINEST = "finest"  # the scene rendered into paper_figures/table{1,2}_finest.*
 WP = "work_precision"  # the scene rendered into paper_figures/work_precision*, cost_of_accuracy*
 STAB = "stability"  # the scene rendered into paper_figures/stability.*
 
@@ -235,9 +237,10 @@ def norm_jsons(scene, norms):
 
 
 def true_table_norms(scene=FIG):
-    """{norm: artifacts} of ``scene`` (the rendered one) for every Table 2 norm and its true
-    variant."""
-    names = [n for base in TABLE2_NORMS for n in (base, true_name(base))]
+    """{norm: artifacts} of ``scene`` (the rendered one) for every Table 2 norm the scene lists
+    (all seven on the paper's, the fine and the theory scenes) and its true variant."""
+    bases = [base for base in TABLE2_NORMS if base in scene_of(scene)["norms"]]
+    names = [n for base in bases for n in (base, true_name(base))]
     return norm_jsons(scene, names)
 
 

@@ -7,6 +7,9 @@
 # is not what its job would render from the current cache has its job forced (the file stays
 # until the job replaces it). Temporary files of atomic writes left by a killed job (kill -9)
 # are deleted. A dry run or --touch only names what it finds (signorini.pipeline.integrity).
+#
+# First, every job the plan starts must fit the memory a job can use here (through Slurm: the
+# largest node), so a scene nobody asked for may need more than this machine has.
 from signorini.pipeline.integrity import (
     apply_verdicts,
     judge,
@@ -14,6 +17,7 @@ from signorini.pipeline.integrity import (
     remove_leftover_temporaries,
     runs_jobs,
 )
+from signorini.pipeline.config import check_planned_memory, memory_limit
 from signorini.pipeline.joblog import LOCK_VARIABLE, environment
 
 # the artifacts record the environment lock's digest (signorini.pipeline.joblog.environment)
@@ -23,6 +27,9 @@ os.environ[LOCK_VARIABLE] = str(Path(workflow.basedir) / "environment.lock")
 def check_plan(dag):
     """The cache check of one DAG: the files whose jobs must run now, or None when nothing changed
     (rendered outputs already forced in an earlier round count as unchanged)."""
+    with one_line_errors():
+        limit = memory_limit(_mem_limit, slurm_node(workflow))
+        check_planned_memory(dag.needrun_jobs(), config, *limit)
     execute = runs_jobs(workflow.executor_plugin)
     verdicts = judge(planned_outputs(dag, code_digest), environment())
     forced = set(workflow.dag_settings.forcerun)

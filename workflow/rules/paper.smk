@@ -191,6 +191,7 @@ SUMMARY_SOURCES = {
     "table2_true": FIGURES["true_tables"]["table2_csv"],
     "table1_fine": FIGURES["fine_tables"]["table1_csv"],
     "table2_fine": FIGURES["fine_tables"]["table2_csv"],
+    "table1_finest": FIGURES["finest_tables"]["table1_csv"],
     "theory": FIGURES["theory_report"]["csv"],
     "theory_rates": FIGURES["theory_report"]["rates_csv"],
     "contact_set": FIGURES["contact_set"]["csv"],

@@ -54,23 +54,34 @@ rule true_norms:
     localrule: True
 
 
-rule fine_tables:
-    """Table 2 continued on the scene fine's meshes: conventions, true norms and their EOCs."""
-    input:
-        norms=flat(true_table_norms(FINE)),
-        paper_table1=REFERENCES["paper_table1"],
-        code=code("fine_tables"),
-    output:
-        **reported(FIGURES["fine_tables"], "fine_tables", "Theory", "Finer meshes"),
-    log:
-        paths.log("scene", "fine_tables", scene=FINE),
-    conda:
-        "../envs/signorini.yaml"
-    params:
-        N=scene_of(FINE)["N"],
-        norm_jsons=true_table_norms(FINE),
-    script:
-        "../scripts/fine_tables.py"
+# Table 2 continued on a scene's finer meshes (fine_tables: to h = 1/4001; finest_tables: to 1/8001)
+for _scene in (FINE, FINEST):
+
+    rule:
+        """Table 2 continued on a scene's meshes: conventions, true norms and their EOCs."""
+        name:
+            f"{_scene}_tables"
+        input:
+            norms=flat(true_table_norms(_scene)),
+            paper_table1=REFERENCES["paper_table1"],
+            code=code("fine_tables"),
+        output:
+            **reported(
+                FIGURES[f"{_scene}_tables"],
+                f"{_scene}_tables",
+                "Theory",
+                "Finer meshes",
+            ),
+        log:
+            paths.log("scene", f"{_scene}_tables", scene=_scene),
+        conda:
+            "../envs/signorini.yaml"
+        params:
+            scene=_scene,
+            N=scene_of(_scene)["N"],
+            norm_jsons=true_table_norms(_scene),
+        script:
+            "../scripts/fine_tables.py"
 
 
 rule eoc_against_h:
@@ -94,4 +105,11 @@ rule fine:
     """Table 2 continued to h = 1/4001: paper_figures/table{1,2}_fine.{csv,md}."""
     input:
         target_outputs("fine"),
+    localrule: True
+
+
+rule finest:
+    """Table 2 one mesh further, to h = 1/8001 (L4, W14, H12): paper_figures/table{1,2}_finest.{csv,md}."""
+    input:
+        target_outputs("finest"),
     localrule: True

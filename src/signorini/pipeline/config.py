@@ -13,11 +13,11 @@ import json
 import math
 import os
 import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from contextlib import contextmanager
 from functools import cache
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from signorini.pipeline.resources import NodeLimits
@@ -517,8 +517,25 @@ def check_memory(field: str, N: int, limit_mb: int, available: str = "available"
     if need > limit_mb:
         raise ConfigError(
             f"{field}: N = {N} needs about {_gb(need)} for its {rule} job (estimate from the "
-            f"peaks measured at N = 2001), more than the {limit_mb / 1024:.1f} GB {available}"
+            f"peaks measured at N = 2001 and 4001), more than the {limit_mb / 1024:.1f} GB {available}"
         )
+
+
+def check_planned_memory(jobs: Iterable[Any], config: Mapping, limit_mb: int, available: str = "available") -> None:
+    """The meshes of the jobs a run starts (Snakemake's, the plan of the requested targets) fit into
+    ``limit_mb`` (``check_memory``, by their scene's solver): the memory check of the meshes this run
+    needs and of no others, so that a scene that needs more than this machine has keeps no other
+    target from running.  (Snakemake lowers a job's ``mem_mb`` request to the memory it was given, so
+    the requests are computed here, not read from the jobs.)  The error names the largest mesh."""
+    from signorini.pipeline.resources import largest_job
+
+    scenes, meshes = config.get("scenes") or {}, set()
+    for job in jobs:
+        name, N = job.wildcards.get("scene"), job.wildcards.get("N")
+        if name in scenes and N is not None and int(N) in scenes[name].get("N", []):
+            meshes.add((name, int(N)))
+    for name, N in sorted(meshes, key=lambda mesh: -largest_job(mesh[1], scenes[mesh[0]]["solver"])[1]):
+        check_memory(f"scenes.{name}.N[{scenes[name]['N'].index(N)}]", N, limit_mb, available, scenes[name]["solver"])
 
 
 def _gb(mb: float) -> str:
@@ -587,13 +604,13 @@ def _check_problem(where: str, block: Mapping, Ns: Sequence[int], energies: bool
         check_support(where, problem, Ns)
 
 
-def _check_scene(where: str, scene: Mapping, limit: int, available: str, node: NodeLimits | None) -> None:
+def _check_scene(where: str, scene: Mapping, limit: int | None, available: str, node: NodeLimits | None) -> None:
     from signorini.fem.norms.conventions import Conventions
     from signorini.pipeline.solver_options import check_options
 
     Ns = scene.get("N", [])
     check_mesh_sizes(f"{where}.N", Ns)
-    for i, N in enumerate(Ns):
+    for i, N in enumerate(Ns if limit is not None else ()):
         check_memory(f"{where}.N[{i}]", N, limit, available, scene["solver"])  # filled by the scene defaults
     problem = check_options(f"{where}.solver_options", scene.get("solver", ""), scene.get("solver_options") or {})
     if problem:
@@ -701,25 +718,34 @@ def _check_runtime(where: str, Ns: list, norms: list, node: NodeLimits) -> None:
             )
 
 
-def check_config(config: dict, mem_limit_mb: int | None = None, node: NodeLimits | None = None) -> None:
-    """Semantic checks of a schema-valid config: scene names that can be paths, integer ``N``
-    strictly increasing, norm names of the grammar (``fem.norms.names``) in their one spelling and
-    each once, admissible problem parameters with an amplitude whose errors do not underflow,
-    and a right-hand side that does not overflow, a support of ``u`` resolved by the coarsest mesh,
-    conventions, meshes whose jobs fit into ``mem_limit_mb`` (default: the memory a job can use here,
-    ``resources.usable_memory``; with ``node``, the largest node of a Slurm partition: its memory and
-    time limit), the solver's options (``signorini.pipeline.solver_options``) and tolerances, no NaN
-    anywhere, and a ``figures_scene`` with the paper's norms.
-    The scene defaults are filled in first (``apply_scene_defaults``: a no-op on a validated config)."""
+def memory_limit(mem_limit_mb: int | None = None, node: NodeLimits | None = None) -> tuple[int, str]:
+    """The memory a job may use in MB and what sets it, as the messages say it: the limit the user
+    gave (``available``), else this process's (the machine's, a cgroup's or a ulimit's:
+    ``resources.usable_memory``); with ``node``, at most the largest node of a Slurm partition."""
     from signorini.pipeline.resources import usable_memory
 
-    apply_scene_defaults(config)
-
-    # the limit the user gave, else this process's: the machine's, a cgroup's or a ulimit's
     limit, available = (int(mem_limit_mb), "available") if mem_limit_mb else usable_memory()
     if node is not None:
         limit = min(limit, node.mem_mb) if mem_limit_mb else node.mem_mb
         available = f"of the largest node of Slurm partition {node.partition}"
+    return limit, available
+
+
+def check_config(
+    config: dict, mem_limit_mb: int | None = None, node: NodeLimits | None = None, memory: bool = True
+) -> None:
+    """Semantic checks of a schema-valid config: scene names that can be paths, integer ``N``
+    strictly increasing, norm names of the grammar (``fem.norms.names``) in their one spelling and
+    each once, admissible problem parameters with an amplitude whose errors do not underflow,
+    and a right-hand side that does not overflow, a support of ``u`` resolved by the coarsest mesh,
+    conventions, meshes whose jobs fit into ``mem_limit_mb`` (``memory_limit``; with ``node``, the
+    largest node of a Slurm partition: its memory and time limit), the solver's options
+    (``signorini.pipeline.solver_options``) and tolerances, no NaN anywhere, and a ``figures_scene``
+    with the paper's norms.  Without ``memory`` the meshes' memory is left to
+    ``check_planned_memory`` (a run checks the meshes its targets need, not every scene's).
+    The scene defaults are filled in first (``apply_scene_defaults``: a no-op on a validated config)."""
+    apply_scene_defaults(config)
+    limit, available = memory_limit(mem_limit_mb, node) if memory else (None, "")
     scenes = config.get("scenes") or {}
     if not scenes:
         raise ConfigError("scenes: at least one scene is required")

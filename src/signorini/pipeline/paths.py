@@ -99,9 +99,12 @@ FIGURES = {
         **{f"table1_{k}": v for k, v in _outputs("table1_true", "csv", "md").items()},
         **{f"table2_{k}": v for k, v in _outputs("table2_true", "csv", "md").items()},
     },
-    "fine_tables": {
-        **{f"table1_{k}": v for k, v in _outputs("table1_fine", "csv", "md").items()},
-        **{f"table2_{k}": v for k, v in _outputs("table2_fine", "csv", "md").items()},
+    **{
+        f"{scene}_tables": {
+            **{f"table1_{k}": v for k, v in _outputs(f"table1_{scene}", "csv", "md").items()},
+            **{f"table2_{k}": v for k, v in _outputs(f"table2_{scene}", "csv", "md").items()},
+        }
+        for scene in ("fine", "finest")
     },
     # the discrete contact sets of the theory scene against the exact one, condition (A_h)
     "contact_set": _outputs("contact_set", "csv", "pdf", "png"),
@@ -162,6 +165,7 @@ TARGET_RULES = {
     "stability": Target(("stability_atlas",), "stability atlas", "snakemake -c2 stability"),
     "true_norms": Target(("true_tables", "free_point_error"), "true norms", "snakemake -c2 true_norms"),
     "fine": Target(("fine_tables", "eoc_against_h"), "Table 2 to h = 1/4001", "snakemake -c2 fine"),
+    "finest": Target(("finest_tables",), "Table 2 to h = 1/8001", "snakemake -c2 finest"),
     "meshes": Target(("meshes_report",), "mesh families", "snakemake -c2 meshes"),
 }
 TARGETS = {name: target.rules for name, target in TARGET_RULES.items()}  # the rules each target renders
@@ -200,6 +204,8 @@ REPORT_PAGE_ENTRIES = {
     "table2_true": ReportPage(FIGURES["true_tables"]["table2_md"], "true_tables", "Paper", "True norms"),
     "table1_fine": ReportPage(FIGURES["fine_tables"]["table1_md"], "fine_tables", "Theory", "Finer meshes"),
     "table2_fine": ReportPage(FIGURES["fine_tables"]["table2_md"], "fine_tables", "Theory", "Finer meshes"),
+    "table1_finest": ReportPage(FIGURES["finest_tables"]["table1_md"], "finest_tables", "Theory", "Finer meshes"),
+    "table2_finest": ReportPage(FIGURES["finest_tables"]["table2_md"], "finest_tables", "Theory", "Finer meshes"),
     "theory": ReportPage(FIGURES["theory_report"]["md"], "theory", "Theory"),
     "work_precision": ReportPage(FIGURES["work_precision_report"]["md"], "work_precision", "Work precision"),
     "stability": ReportPage(FIGURES["stability_atlas"]["md"], "stability", "Stability"),

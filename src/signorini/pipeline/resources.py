@@ -1,8 +1,9 @@
 """Memory and run-time requests of the per-mesh jobs, defined once: the rules' ``resources`` and
 the config check's bound use them.  Memory grows with the number of unknowns, (N + 1)² ≈ N²; the
-constants follow the peak memory of each stage at N = 2001 (``docs/evidence/scale.json``, per stage
-and mesh; the theory quantities with their Ritz projection by multigrid CG) with some headroom; a
-solve job's request follows the route its scene's solver takes on that mesh.
+constants follow the peak memory of each stage at N = 2001 and 4001 (``docs/evidence/scale.json``,
+per stage and mesh; the theory quantities with their Ritz projection by multigrid CG) with a fifth
+or more of headroom, so that a request at N = 8001 extrapolates the measured growth; a solve job's
+request follows the route its scene's solver takes on that mesh.
 The run-time requests are generous multiples of the run times on a loaded machine, since a job
 that outlives its request is killed (docs/evidence/design-measurements.md#job-requests)."""
 
@@ -22,14 +23,14 @@ from signorini.fem.norms.names import parse_norm_name
 
 # rule: (base, N² per unit) of the memory request in MB and of the run-time request in minutes
 MEM_MB = {
-    "discretise": (500, 4000),  # the stencil assembly streams: O(n) memory
+    "discretise": (500, 5000),  # the stencil assembly streams: O(n) memory
     "solve": (500, 400),  # the direct route: a sparse Cholesky factor with its fill-in
-    "solve_multigrid": (500, 2000),  # the multigrid route: the matrix, its hierarchy, a few vectors
+    "solve_multigrid": (500, 3000),  # the multigrid route: the matrix, its hierarchy, a few vectors
     # the multigrid route on a mesh family's matrix: classical AMG's hierarchy is larger
     # (its peak memory: docs/evidence/cold_meshes.json)
     "solve_amg": (500, 700),
-    "norm": (500, 2000),
-    "theory_quantities": (500, 1500),  # O(n): the matrix, its AMG hierarchy, chunks of quadrature
+    "norm": (500, 6000),
+    "theory_quantities": (500, 3000),  # O(n): the matrix, its AMG hierarchy, chunks of quadrature
     "work_precision_measure": (1500, 250),
 }
 RUNTIME_MIN = {

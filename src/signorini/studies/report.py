@@ -151,10 +151,11 @@ def _evidence(target: str, config: Mapping) -> list[str]:
     scenes, fig = config["scenes"], config.get("figures_scene", "paper")
     if target == "all":
         return [paths.PATHS[k].format(scene=fig) for k in ("errors_csv", "eoc_csv")]
-    if target in ("true_norms", "fine"):
-        scene = fig if target == "true_norms" else "fine"
+    if target in ("true_norms", "fine", "finest"):
+        scene = fig if target == "true_norms" else target
+        listed = scenes[scene].get("norms") or TABLE2_NORMS  # the scene defaults: Table 2's norms
         return [paths.PATHS["norm_json"].format(scene=scene, N=N, norm=true_name(n))
-                for N in scenes[scene]["N"] for n in TABLE2_NORMS]
+                for N in scenes[scene]["N"] for n in TABLE2_NORMS if n in listed]
     if target == "theory":
         return [paths.PATHS["errors_csv"].format(scene="theory"),
                 *(paths.PATHS["theory_json"].format(scene="theory", N=N) for N in scenes["theory"]["N"])]

@@ -2,7 +2,8 @@
 norms evaluated to a stated accuracy (``<norm>_true``, ``fem.norms.true``) and the paper's printed
 values (``paper_figures/table1_true.{csv,md}``), and the EOCs of the true norms
 (``paper_figures/table2_true.{csv,md}``); with ``FINE_TARGET`` the same on the scene ``fine``'s
-meshes (``table{1,2}_fine``).  Rendering only: the values are the norm artifacts, and the Markdown
+meshes (``table{1,2}_fine``), with ``FINEST_TARGET`` on the scene ``finest``'s (``table{1,2}_finest``).
+Rendering only: the values are the norm artifacts, and the Markdown
 follows from the rows of the errors CSV alone (``markdown_from_csv`` renders it from a written CSV).
 
 Each gap of a convention to its true norm is attributed to a source by a computed condition
@@ -114,6 +115,18 @@ FINE_TARGET = TrueTablesTarget(
     title="Finer meshes (h = {h_range}): the errors of Table 2's norms under the conventions and as true norms",
     eoc_title="EOCs of the true norms on finer meshes (h = {h_range}): Table 2 continued",
 )
+# one mesh further: the scene `finest`'s meshes, to 64 M unknowns
+FINEST_TARGET = TrueTablesTarget(
+    name="finest",
+    errors_md="table1_finest.md",
+    convention_values="on the same meshes",
+    conventions="on the same meshes",
+    title="The finest meshes (h = {h_range}): the errors of three of Table 2's norms under the conventions and as "
+    "true norms",
+    eoc_title="EOCs of the true norms on the finest meshes (h = {h_range}): Table 2 one mesh further",
+)
+# the targets that continue Table 2 on a scene of their own (rule fine_tables), by scene
+CONTINUED_TARGETS = {target.name: target for target in (FINE_TARGET, FINEST_TARGET)}
 
 
 def _pct(x: float) -> str:
