@@ -138,35 +138,14 @@ def test_a_p1_function_s_norm_by_the_kernels_agrees_with_numpy_to_round_off(quad
     for mesh in [*_meshes(), _clockwise(friedrichs_keller(12))]:
         v = 1e-15 * np.sin(7.0 * mesh.p[0] - 4.0 * mesh.p[1]) + 3e-16 * np.cos(11.0 * mesh.p[1])
         norms = {name: define(name, conv) for name in NAMES}
-        with compiled_points():
-            together = conventional._p1_norms(zero, mesh, v, conv, norms)
         for name, norm in norms.items():
             with compiled_points():
                 got = conventional._p1_norms(zero, mesh, v, conv, {name: norm})
             expected = conventional.evaluate_norms(zero, mesh, v, [name], conv)
             assert got[name] == pytest.approx(expected[name], rel=1e-13)
-            # one pass for all: the shared squarings give each norm's bits alone
-            assert together[name] == got[name], name
 
 
-def test_the_uncertainty_s_twenty_norms_in_one_pass_agree_with_numpy():
-    """The norms of a job's uncertainty (the theory scene's twenty, maxima and p-sums, the one-sided
-    parts' two-sided norms) of a P1 function: by the kernels together, within round-off of numpy's
-    shared error field."""
-    names = ["L2", "L3", "L4", "L6", "L8", "L16", "L32", "Linf", "W12", "W13", "W14", "W16", "W18", "W116", "W132",
-             "W1inf", "H1"]
-    zero, conv = Problem().vanishing(), Conventions()
-    for mesh in [*_meshes(), _clockwise(friedrichs_keller(12))]:
-        v = 1e-15 * np.sin(7.0 * mesh.p[0] - 4.0 * mesh.p[1]) + 3e-16 * np.cos(11.0 * mesh.p[1])
-        with compiled_points():
-            got = conventional.evaluate_norms(zero, mesh, v, [*names, "H12"], conv)
-        expected = conventional.evaluate_norms(zero, mesh, v, [*names, "H12"], conv)
-        for name in names:
-            assert got[name] == pytest.approx(expected[name], rel=1e-13), name
-        assert got["H12"] == expected["H12"]  # on ∂Ω: numpy's field either way
-
-
-def test_the_p1_kernels_take_the_norms_of_a_vanishing_u_on_large_meshes_only():
+def test_the_p1_kernels_take_one_norm_of_a_vanishing_u_on_large_meshes_only():
     mesh, conv = friedrichs_keller(8), Conventions()
     P, v = Problem(), np.linspace(0.0, 1e-12, friedrichs_keller(8).p.shape[1])
     one = {"L4": define("L4", conv)}
@@ -175,13 +154,15 @@ def test_the_p1_kernels_take_the_norms_of_a_vanishing_u_on_large_meshes_only():
         assert conventional._p1_norms(P.vanishing(), mesh, v, conv, one).keys() == {"L4"}
         assert conventional._p1_norms(P, mesh, v, conv, one) == {}  # u ≢ 0
         assert conventional._p1_norms(P.vanishing(), mesh, v, conv, {"Linf": define("Linf", conv)}).keys() == {"Linf"}
-        two = one | {"W14": define("W14", conv), "Linf": define("Linf", conv)}  # together, in one pass
-        assert conventional._p1_norms(P.vanishing(), mesh, v, conv, two).keys() == {"L4", "W14", "Linf"}
-        inside = conventional.evaluate_norms(P.vanishing(), mesh, v, ["L4", "W14", "Linf"], conv)
+        two = one | {"W14": define("W14", conv)}  # several share numpy's error field
+        assert conventional._p1_norms(P.vanishing(), mesh, v, conv, two) == {}
+        inside = (
+            conventional.evaluate_norms(P.vanishing(), mesh, v, ["L4"], conv),
+            conventional.evaluate_norms(P.vanishing(), mesh, v, ["L4", "W14"], conv),
+        )
     with compiled_points():
-        assert inside == conventional._p1_norms(P.vanishing(), mesh, v, conv, two)  # the kernels' values
-    outside = conventional.evaluate_norms(P.vanishing(), mesh, v, ["L4", "W14", "Linf"], conv)  # numpy's
-    assert inside == pytest.approx(outside, rel=1e-13)
+        assert inside[0] == conventional._p1_norms(P.vanishing(), mesh, v, conv, one)  # the kernels' value
+    assert inside[1] == conventional.evaluate_norms(P.vanishing(), mesh, v, ["L4", "W14"], conv)  # numpy's bits
 
 
 @pytest.mark.parametrize("points", ["vertices", "midpoints", "quadrature", "all"])

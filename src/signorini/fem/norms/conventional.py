@@ -526,67 +526,40 @@ def evaluate_norms(
 def _p1_norms(
     problem: Problem, mesh: MeshTri, u_h: np.ndarray, conv: Conventions, norms: dict[str, NormDefinition]
 ) -> dict[str, float]:
-    """The norms on Ω of ``norms`` where ``u ≡ 0`` (the problem's ``support`` empty: ``e = −u_h``, a P1
-    function, e.g. an algebraic error) and the compiled point kernels are enabled (a large mesh), by
-    the compiled kernels of ``fem.norms.kernels``: each maximum in one pass of ``p1_rule_largest``
-    over each part of its point set; the p-sums together, after one pass per part for the largest
-    ``|part|`` (each norm's power of two near the largest of its parts), in one pass of
-    ``p1_rule_sums``.  The same operations per point as ``error_field`` and ``field_norm``, the sums
-    in their own order (docs/evidence/design-measurements.md#compiled-norm-kernels).  Empty elsewhere."""
+    """The norm of ``norms`` if it is one norm on Ω, ``u ≡ 0`` (the problem's ``support`` empty:
+    ``e = −u_h``, a P1 function, e.g. an algebraic error) and the compiled point kernels are enabled
+    (a large mesh), by the compiled kernels of ``fem.norms.kernels``: a maximum in one pass of
+    ``p1_rule_largest`` over each part of its point set, a p-sum in two (the largest ``|part|``,
+    then ``p1_rule_sum`` at a power of two near it); the same operations per point as
+    ``error_field`` and ``field_norm``, the sums in their own order.  Several norms share numpy's
+    error field instead, which costs less than two passes for each
+    (docs/evidence/design-measurements.md#compiled-norm-kernels).  Empty elsewhere."""
     support = problem.support()
-    if not (norms and compiled_points_enabled() and support is not None and support[1] == 0.0):
+    if not (len(norms) == 1 and compiled_points_enabled() and support is not None and support[1] == 0.0):
         return {}
     from signorini.fem.norms import kernels  # numba: only where the compiled kernels are enabled
 
+    ((name, norm),) = norms.items()
     X, W, role = _reference_rule(conv.quadrature)
     p, t = np.ascontiguousarray(mesh.p, dtype=float), np.ascontiguousarray(mesh.t)
     mesh_v = (p[0], p[1], t, np.ascontiguousarray(u_h, dtype=float))
+    parts = np.array([PARTS.index(x) for x in norm.parts])
 
-    @functools.cache
-    def largest(parts: tuple[str, ...], points: str | None) -> float:
-        """The largest ``|part|`` over the element points ``points``, or the rule's (None)."""
-        X0, X1 = (np.ascontiguousarray(a) for a in (X if points is None else element_points(points)))
-        placed = role if points is None and role is not None else -1
-        return kernels.p1_rule_largest(*mesh_v, X0, X1, placed, np.array([PARTS.index(x) for x in parts]))
+    def largest(points: np.ndarray, placed: int | None) -> float:
+        X0, X1 = np.ascontiguousarray(points[0]), np.ascontiguousarray(points[1])
+        return kernels.p1_rule_largest(*mesh_v, X0, X1, -1 if placed is None else placed, parts)
 
-    out, sums = {}, {}
-    for name, norm in norms.items():
-        if norm.combination == MAX:  # the point set of the conventions' field: element points, the rule's or both
-            which = getattr(conv, norm.points)
-            sets = ([] if which == "quadrature" else [which]) + ([None] if which in ("quadrature", "all") else [])
-            out[name] = max(largest(norm.parts, points) for points in sets)
-        else:
-            sums[name] = (norm, _scale_of(max(largest((x,), None) for x in norm.parts)))
-    if sums:
-        out |= _p1_sums(kernels, mesh_v, X, W, role, sums)
-    return out
-
-
-def _p1_sums(kernels, mesh_v: tuple, X: np.ndarray, W: np.ndarray, role: int | None, sums: dict) -> dict[str, float]:
-    """The p-sum norms ``sums`` ({name: (definition, scale)}) by one pass of ``kernels.p1_rule_sums``:
-    a chain per part and scale, as deep as the largest exponent that reads it."""
-    chains: dict[tuple[str, float], int] = {}
-    depth: dict[tuple[str, float], int] = {}
-    rows = []
-    for norm, scale in sums.values():
-        steps = max(kernels.squarings(float(norm.p)).bit_length() - 1, 0)
-        row = []
-        for x in norm.parts:
-            key = (x, scale)
-            chains.setdefault(key, len(chains))
-            depth[key] = max(depth.get(key, 0), steps)
-            row.append(chains[key])
-        rows.append(row)
-    width = max(len(row) for row in rows)
-    norm_chains = np.array([row + [-1] * (width - len(row)) for row in rows], dtype=np.int64)
-    chain_parts = np.array([PARTS.index(x) for x, _ in chains], dtype=np.int64)
-    chain_scales = np.array([scale for _, scale in chains], dtype=float)
-    chain_depth = np.array([depth[key] for key in chains], dtype=np.int64)
-    powers = [float(norm.p) for norm, _ in sums.values()]
-    p_ints = np.array([kernels.squarings(q) for q in powers], dtype=np.int64)
-    totals = np.empty(len(sums))
+    if norm.combination == MAX:  # the point set of the conventions' field: element points, the rule's or both
+        which = getattr(conv, norm.points)
+        sets = ([] if which == "quadrature" else [(element_points(which), None)]) + (
+            [(X, role)] if which in ("quadrature", "all") else []
+        )
+        return {name: max(largest(points, placed) for points, placed in sets)}
+    power = float(norm.p)
+    scale = _scale_of(largest(X, role))
     X0, X1, weights = (np.ascontiguousarray(a) for a in (X[0], X[1], W))
-    kernels.p1_rule_sums(*mesh_v, X0, X1, weights, -1 if role is None else role, chain_parts, chain_scales,
-                         chain_depth, norm_chains, p_ints, np.array(powers), totals)
-    return {name: float(total ** (1.0 / q) * scale)
-            for (name, (_, scale)), total, q in zip(sums.items(), totals, powers, strict=True)}
+    placed = -1 if role is None else role
+    total = kernels.p1_rule_sum(
+        *mesh_v, X0, X1, weights, placed, parts, kernels.squarings(power), power, scale, np.empty(parts.size)
+    )
+    return {name: total ** (1.0 / power) * scale}

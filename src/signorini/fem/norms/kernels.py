@@ -1,9 +1,9 @@
 """The compiled kernels (numba) of the norms: whole rules over triangles in one pass, where numpy
 forms arrays of every point, part and power.
 
-- ``p1_rule_largest`` and ``p1_rule_sums``: norms under the paper's conventions of a P1 function ``v`` as the
-  error ``e = −v`` against ``u ≡ 0`` (an algebraic error ``δ``, ``studies.scene.norm.algebraic_uncertainties``),
-  at the points of the conventions' triangle rule (``fem.norms.conventional``), every p-sum in one pass.
+- ``p1_rule_largest`` and ``p1_rule_sum``: a norm under the paper's conventions of a P1 function ``v`` as the error
+  ``e = −v`` against ``u ≡ 0`` (an algebraic error ``δ``, ``studies.scene.norm.algebraic_uncertainties``),
+  at the points of the conventions' triangle rule (``fem.norms.conventional``).
 - ``manufactured_rule_integrals`` and ``manufactured_survey``: the true norms' conical rule over a
   triangle and their survey of the triangles (``fem.norms.true``) for the manufactured problem,
   whose ``u`` and ``∇u`` come from ``fem.point_kernels.manufactured_point``.
@@ -22,7 +22,6 @@ from __future__ import annotations
 import math
 
 import numba
-import numpy as np
 
 from signorini.fem.point_kernels import manufactured_point
 
@@ -150,59 +149,30 @@ def p1_rule_largest(px, py, t, v, X0, X1, role, parts):  # pragma: no cover - co
 
 
 @numba.njit(cache=True)
-def p1_rule_sums(
-    px, py, t, v, X0, X1, W, role, chain_parts, chain_scales, chain_depth, norm_chains, p_ints, ps, out
-):  # pragma: no cover - compiled
-    """``out[j] = Σ_T |det J_T| Σ_q W_q Σ_parts |part / scale_j|^p_j`` of ``e = −v`` for every norm
-    ``j`` at once, the sums ``fem.norms.conventional.field_p_sum`` reduces, in one pass over the
-    triangles.  A *chain* is one part at one scale with its squarings ``|part / scale|^(2^i)``,
-    ``i ≤ chain_depth``, formed once per point (once per triangle for the gradient parts, constant
-    there) and shared by the norms that read it; ``norm_chains[j]`` lists norm ``j``'s chains in its
-    parts' order (−1 pads).  Each power is the product of its exponent's squarings in increasing
-    order (``_power``'s, bit for bit), or ``pow`` where ``p_ints[j] < 1``."""
-    n_chains, n_norms = chain_parts.size, p_ints.size
-    depth = 1
-    for k in range(n_chains):
-        depth = max(depth, chain_depth[k] + 1)
-    sq = np.empty((n_chains, depth))
-    triangle = np.empty(n_norms)
-    for j in range(n_norms):
-        out[j] = 0.0
+def p1_rule_sum(px, py, t, v, X0, X1, W, role, parts, p_int, p, scale, constant):  # pragma: no cover - compiled
+    """``Σ_T |det J_T| Σ_q W_q Σ_parts |part / scale|^p`` of ``e = −v``, the sum that
+    ``fem.norms.conventional.field_p_sum`` reduces: per point the parts' powers added in order, the
+    powers of the gradient parts (constant on a triangle) formed once per triangle (``constant``:
+    scratch of the parts' size)."""
+    total = 0.0
     for el in range(t.shape[1]):
         a, b, c, det, g0, g1 = _p1_triangle(px, py, t, v, el, role)
-        for k in range(n_chains):
-            if chain_parts[k] >= PART_D1:  # constant on the triangle
-                sq[k, 0] = _magnitude(chain_parts[k], 0.0, g0, g1) / chain_scales[k]
-                for i in range(1, chain_depth[k] + 1):
-                    sq[k, i] = sq[k, i - 1] * sq[k, i - 1]
-        for j in range(n_norms):
-            triangle[j] = 0.0
+        for j in range(parts.size):
+            if parts[j] >= PART_D1:
+                constant[j] = _power(_magnitude(parts[j], 0.0, g0, g1) / scale, p_int, p)
+        triangle = 0.0
         for q in range(W.size):
             e = -(v[a] * (1.0 - X0[q] - X1[q]) + v[b] * X0[q] + v[c] * X1[q])
-            for k in range(n_chains):
-                if chain_parts[k] < PART_D1:
-                    sq[k, 0] = _magnitude(chain_parts[k], e, g0, g1) / chain_scales[k]
-                    for i in range(1, chain_depth[k] + 1):
-                        sq[k, i] = sq[k, i - 1] * sq[k, i - 1]
-            for j in range(n_norms):
-                point = 0.0
-                for m in range(norm_chains.shape[1]):
-                    k = norm_chains[j, m]
-                    if k < 0:
-                        break
-                    if p_ints[j] < 1:
-                        term = sq[k, 0] ** ps[j]
-                    else:
-                        term, bits, i = 1.0, p_ints[j], 0
-                        while bits:
-                            if bits & 1:
-                                term *= sq[k, i]
-                            bits >>= 1
-                            i += 1
-                    point = term if m == 0 else point + term
-                triangle[j] += point * W[q]
-        for j in range(n_norms):
-            out[j] += triangle[j] * det
+            point = 0.0
+            for j in range(parts.size):
+                if parts[j] >= PART_D1:
+                    term = constant[j]
+                else:
+                    term = _power(_magnitude(parts[j], e, g0, g1) / scale, p_int, p)
+                point = term if j == 0 else point + term
+            triangle += point * W[q]
+        total += triangle * det
+    return total
 
 
 @numba.njit(cache=True)
