@@ -34,34 +34,19 @@ import numpy as np
 
 
 @numba.njit(cache=True)
-def pyamg_order(x, b, offsets, values, diagonal, lo, hi):  # pragma: no cover - compiled
-    for i in range(lo, hi):
-        rsum = 0.0
-        for k in range(len(offsets)):
-            rsum += values[k] * x[i + offsets[k]]
-        x[i] = (b[i] - rsum) / diagonal
-
-
-@numba.njit(cache=True)
-def west_last(x, b, offsets, values, diagonal, lo, hi, west):  # pragma: no cover - compiled
+def sweep(x, b, offsets, values, diagonal, lo, hi, west, reciprocal):  # pragma: no cover - compiled
+    """A forward sweep over rows ``lo:hi``: the off-diagonal sum in CSR order from 0.0, the term of
+    the stencil entry ``west`` (the previous row) added last where ``west ≥ 0``; the division by the
+    diagonal, or a multiplication by its reciprocal."""
+    inverse = 1.0 / diagonal
     for i in range(lo, hi):
         rsum = 0.0
         for k in range(len(offsets)):
             if k != west:
                 rsum += values[k] * x[i + offsets[k]]
-        rsum += values[west] * x[i - 1]
-        x[i] = (b[i] - rsum) / diagonal
-
-
-@numba.njit(cache=True)
-def west_last_reciprocal(x, b, offsets, values, inverse, lo, hi, west):  # pragma: no cover - compiled
-    for i in range(lo, hi):
-        rsum = 0.0
-        for k in range(len(offsets)):
-            if k != west:
-                rsum += values[k] * x[i + offsets[k]]
-        rsum += values[west] * x[i - 1]
-        x[i] = (b[i] - rsum) * inverse
+        if west >= 0:
+            rsum += values[west] * x[i - 1]
+        x[i] = (b[i] - rsum) * inverse if reciprocal else (b[i] - rsum) / diagonal
 
 
 @numba.njit(cache=True)
@@ -87,21 +72,21 @@ def measure(N: int, repeats: int) -> dict:
     b, x0 = rng.standard_normal(n), rng.standard_normal(n)
     lo, hi = side + 1, n - side - 1
     forms = {
-        "pyamg_order": lambda x: pyamg_order(x, b, offsets, values, diagonal, lo, hi),
-        "west_last": lambda x: west_last(x, b, offsets, values, diagonal, lo, hi, west),
-        "west_last_reciprocal": lambda x: west_last_reciprocal(x, b, offsets, values, 1.0 / diagonal, lo, hi, west),
+        "pyamg_order": lambda x: sweep(x, b, offsets, values, diagonal, lo, hi, -1, False),
+        "west_last": lambda x: sweep(x, b, offsets, values, diagonal, lo, hi, west, False),
+        "west_last_reciprocal": lambda x: sweep(x, b, offsets, values, diagonal, lo, hi, west, True),
         "jacobi": lambda x: jacobi(x, y, b, offsets, values, 1.0 / diagonal, lo, hi),
     }
     y = np.empty(n)
     out = {}
-    for name, sweep in forms.items():
+    for name, run in forms.items():
         x = x0.copy()
-        sweep(x)  # compile, touch the memory
+        run(x)  # compile, touch the memory
         times = []
         for _ in range(repeats):
             x[:] = x0
             t = time.perf_counter()
-            sweep(x)
+            run(x)
             times.append((time.perf_counter() - t) / (hi - lo) * 1e9)
         out[name] = {"ns_per_row_median": float(np.median(times)), "ns_per_row_range": [min(times), max(times)]}
     base = out["pyamg_order"]["ns_per_row_median"]
