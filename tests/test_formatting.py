@@ -56,3 +56,19 @@ def test_times_ratios_and_exponents_are_printed_with_their_intervals():
         "×2.4 (undetermined: one sample each)"
     )
     assert fmt_factor(0.821) == "0.82" and fmt_factor(12.4) == "12" and fmt_timed({"value": float("nan")}) == "—"
+
+
+def test_a_tex_subscript_stays_upright_in_markdown():
+    """``‖e‖_{L²(∂Ω)}^{1/2} ‖e‖_{H¹(∂Ω)}^{1/2}`` as written: CommonMark (the report's renderer) took the
+    two ``_`` for an emphasis and set the text between them in italics; code spans are left alone."""
+    from markdown_it import MarkdownIt
+
+    from signorini.formatting import markdown_text
+
+    text = "estimate ‖e‖_{L²(∂Ω)}^{1/2} ‖e‖_{H¹(∂Ω)}^{1/2}, not `‖e‖_{H¹}` nor `<norm>_true`; u_h^s‖_{L⁴}"
+    render = MarkdownIt("commonmark").render
+    assert "<em>" in render(text)
+    escaped = markdown_text(text)
+    assert "<em>" not in render(escaped)
+    assert render(escaped).count("_{") == 4 and "<code>‖e‖_{H¹}</code>" in render(escaped)
+    assert markdown_text(escaped.replace("\\_{", "_{")) == escaped and markdown_text("no subscript") == "no subscript"

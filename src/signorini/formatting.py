@@ -62,6 +62,14 @@ def certified_errors(errors, uncertainties, norms: Sequence[str]) -> tuple[list[
     return values, digits
 
 
+def markdown_text(text: str) -> str:
+    """``text`` with each ``_{`` outside code spans written ``\\_{``: a subscript in TeX's spelling
+    (``‖e‖_{L²(∂Ω)}``) that Markdown would otherwise take for the start or end of an emphasis,
+    setting the text between two of them in italics."""
+    spans = text.split("`")
+    return "`".join(span.replace("_{", "\\_{") if i % 2 == 0 else span for i, span in enumerate(spans))
+
+
 def h_label(N: int | str) -> str:
     """The paper's row label ``1/N``."""
     return f"1/{int(N)}"

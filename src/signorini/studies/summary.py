@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from signorini.formatting import markdown_text
 from signorini.pipeline.artifacts import atomic_write_text
 from signorini.published import TABLE2_NORMS, expected_rate, label_md
 from signorini.studies.paper.deviations import table1_verdicts
@@ -342,7 +343,7 @@ def summary_stage(
     for title, verdicts in sections(inputs, sources):
         lines += [f"## {title}", "", *_bullets(verdicts), ""]
     lines += figures_section(captions_dir)
-    atomic_write_text(out_md, "\n".join(lines).rstrip() + "\n")
+    atomic_write_text(out_md, markdown_text("\n".join(lines).rstrip() + "\n"))
 
 
 def _two(x: float) -> str:

@@ -24,7 +24,7 @@ import numpy as np
 
 from signorini.fem.convergence import eoc, regression_slope
 from signorini.fem.norms.names import parse_norm_name, true_name
-from signorini.formatting import csv_text, h_label, md_table
+from signorini.formatting import csv_text, h_label, markdown_text, md_table
 from signorini.pipeline.artifacts import atomic_write_text
 from signorini.published import THEORETICAL_ORDERS, label_md
 from signorini.studies.paper.reference import read_table_csv, relative_deviation
@@ -340,7 +340,8 @@ def pages(
 ) -> tuple[str, str]:
     """The two Markdown pages (errors, EOCs) from the rows of the errors CSV."""
     Ns, conv, true = series(rows, norms)
-    return table1_true_md(rows, norms, rtol, paper_table1, target), table2_true_md(Ns, conv, true, norms, rtol, target)
+    table1_md = table1_true_md(rows, norms, rtol, paper_table1, target)
+    return markdown_text(table1_md), markdown_text(table2_true_md(Ns, conv, true, norms, rtol, target))
 
 
 def rows_from_csv(path: str | os.PathLike) -> tuple[list[dict], list[str]]:

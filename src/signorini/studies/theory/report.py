@@ -18,6 +18,7 @@ import pandas as pd
 
 from signorini.fem.convergence import eoc, regression_slope
 from signorini.fem.norms.names import parse_norm_name, true_name
+from signorini.formatting import markdown_text
 from signorini.pipeline.artifacts import atomic_write_text
 from signorini.published import TABLE2_NORMS, expected_rate
 
@@ -403,7 +404,7 @@ def report_stage(
         for N, path in zip(errors["N"], paths, strict=True)
     ]
     md = findings(table, rates, table2_rows(errors), true_table2, accuracy, contact)
-    atomic_write_text(outs["md"], md)
+    atomic_write_text(outs["md"], markdown_text(md))
     save(rate_figure(rates).figure, outs["rates_pdf"], outs["rates_png"])
     if contact is None:
         save(extra_figure(table), outs["extra_pdf"], outs["extra_png"])

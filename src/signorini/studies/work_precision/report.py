@@ -401,6 +401,7 @@ def report_stage(
     """Stage ``work_precision_report``: the findings (against the published Tables 1 and 2 in
     ``workflow/reference/``) rendered into ``work_precision.md``; ``timing``: the study's
     ``timing`` block (the protocol of its measurements)."""
+    from signorini.formatting import markdown_text
     from signorini.pipeline.artifacts import atomic_write_text
     from signorini.studies.paper.reference import by_mesh, read_table_csv
     from signorini.studies.work_precision.table import read_runs
@@ -409,5 +410,5 @@ def report_stage(
     p1, p2 = read_table_csv(paper_table1), read_table_csv(paper_table2)
     protocol = Protocol.from_mapping(timing)
     found = findings(runs, TABLE1_NORMS, by_mesh(p1, "L4"), by_mesh(p2, "L4"), protocol)
-    atomic_write_text(out_md, work_precision_md(runs, found, source, protocol))
+    atomic_write_text(out_md, markdown_text(work_precision_md(runs, found, source, protocol)))
     return found
