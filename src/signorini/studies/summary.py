@@ -314,7 +314,7 @@ def sections(inputs: Mapping[str, str], sources: Mapping[str, str]) -> list[tupl
     true_keys = ("table1_true", "table1_fine")
     wrong = _missing(sources, true_keys)
     if Path(sources["table1_true"]).exists():
-        # the finest meshes (about 21 GB per job) only where their table exists: not a missing source
+        # the finest meshes (a 17 GB solve) only where their table exists: not a missing source
         cells = _true_cells(sources["table1_true"], sources["table1_fine"], sources.get("table1_finest"))
         used = tuple(sources[k] for k in true_keys if Path(sources[k]).exists())
         finest = tuple(p for p in [sources.get("table1_finest")] if p and Path(p).exists())
