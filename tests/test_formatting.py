@@ -7,6 +7,7 @@ import math
 import pytest
 
 from signorini.formatting import (
+    ceil_sig,
     certified_decimals,
     certified_digits,
     fmt_factor,
@@ -36,6 +37,13 @@ def test_certified_digits(value, uncertainty, digits):
 
 def test_certified_decimals():
     assert [certified_decimals(u) for u in (1e-7, 3e-4, 0.05, 2.0, 0.0)] == [4, 3, 1, 0, 4]
+
+
+@pytest.mark.parametrize(
+    ("x", "bound"), [(1.2760455757412132e-09, 2e-09), (2e-09, 2e-09), (9.5e-12, 1e-11), (0.30000000000000004, 0.4)]
+)
+def test_ceil_sig_rounds_a_bound_up_to_one_digit(x, bound):
+    assert ceil_sig(x) == bound and ceil_sig(x) >= x
 
 
 def test_round_sig_is_what_every_format_prints():

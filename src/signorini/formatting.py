@@ -38,6 +38,15 @@ def certified_decimals(uncertainty: float, cap: int = EOC_DECIMALS) -> int:
     return max(0, min(cap, math.floor(-math.log10(uncertainty))))
 
 
+def ceil_sig(x: float) -> float:
+    """``x > 0`` rounded up to one significant digit, as ``f"{x:.0e}"`` prints it (a bound stays a bound)."""
+    rounded = f"{x:.0e}"
+    if float(rounded) >= x:
+        return float(rounded)
+    mantissa, exponent = rounded.split("e")
+    return float(f"{int(mantissa) + 1}e{exponent}")
+
+
 def round_sig(x: float, digits: int) -> float:
     """``x`` rounded to ``digits`` significant digits (correctly rounded decimal, as printed)."""
     return float(f"{x:.{digits - 1}e}") if math.isfinite(x) else x

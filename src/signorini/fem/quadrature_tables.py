@@ -1,7 +1,8 @@
-"""Quadrature rules as scikit-fem and SciPy compute them, bit for bit (hexadecimal floats),
-so that a job evaluating norms needs neither library (their import is most of such a job's
-time).  Written by ``scripts/quadrature_tables.py``; ``tests/fem/test_quadrature.py`` checks
-every rule against the libraries."""
+"""Quadrature rules as scikit-fem and SciPy computed them (hexadecimal floats), so that a job
+evaluating norms needs neither library (their import is most of such a job's time) and gives
+the same bits on every machine (SciPy's last bits depend on the machine).  Written by
+``scripts/quadrature_tables.py``; ``tests/fem/test_quadrature_tables.py`` checks every rule
+against the libraries."""
 
 # scikit-fem's degree-8 rule on the reference triangle: points (2, 16) row by row, weights (16,)
 DUNAVANT8_POINTS = (

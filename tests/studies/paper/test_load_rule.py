@@ -60,12 +60,17 @@ def test_stage_table(tmp_path):
         boundary=disc.boundary,
     )
     u = solve_discrete(disc, "active_set").u
-    ours = evaluate_norms(at.problem, disc.mesh, u, list(TABLE1_NORMS), Conventions())
+    values = evaluate_norms(at.problem, disc.mesh, u, list(TABLE1_NORMS), Conventions())
+    ours = {name: (value, 1e-3 * value) for name, value in values.items()}  # a stated uncertainty of 0.1 %
     rows = compare_load_rules(at, system, ours, Conventions())
-    assert [r[2] for r in rows] == list(TABLE1_NORMS) and [r[3] for r in rows] == list(ours.values())
+    assert [r[2] for r in rows] == list(TABLE1_NORMS) and [r[3] for r in rows] == list(values.values())
     for row in rows:
-        assert row[5] == pytest.approx((row[4] - row[3]) / row[3])
-        assert 0 < abs(row[5]) < 0.05 and row[7] < 1e-8 and 0 < row[6] < 1e-2
+        record = dict(zip(COLUMNS, row, strict=True))
+        assert record["relative_change"] == pytest.approx((record["rule_load"] - record["default_load"]) / row[3])
+        assert 0 < abs(record["relative_change"]) < 0.05 and record["kkt_worst"] < 1e-8
+        assert 0 < record["load_change"] < 1e-2
+        # the default value's 0.1 % plus the rule solve's own round-off, far below it
+        assert 1e-3 <= record["change_uncertainty"] < 1e-3 * (1 + 1e-6)
 
 
 def test_stage_reads_each_meshs_norm_artifacts(tmp_path, monkeypatch):
@@ -74,13 +79,14 @@ def test_stage_reads_each_meshs_norm_artifacts(tmp_path, monkeypatch):
     meshes = [SceneMesh(PARAMS, N, "sw_ne") for N in (11, 21)]
     seen = []
     monkeypatch.setattr(stage, "read_norm", lambda path, name, N: float(N))
+    monkeypatch.setattr(stage, "read_uncertainty", lambda path, name, N: N / 4)
     monkeypatch.setattr(
         stage,
         "compare_load_rules",
-        lambda at, system, ours, conv: seen.append((system, ours)) or [[at.N, at.h, "L4", 1, 1, 0, 0, 0, "q"]],
+        lambda at, system, ours, conv: seen.append((system, ours)) or [[at.N, at.h, "L4", 1, 1, 0, 0, 0, 0, "q"]],
     )
     out = tmp_path / "load_rule.csv"
     load_rule_stage(meshes, ["s11", "s21"], {"L4": ["a", "b"]}, {}, out)
     frame = pd.read_csv(out)
     assert list(frame.columns) == COLUMNS and list(frame.N) == [11, 21]
-    assert seen == [("s11", {"L4": 11.0}), ("s21", {"L4": 21.0})]
+    assert seen == [("s11", {"L4": (11.0, 2.75)}), ("s21", {"L4": (21.0, 5.25)})]

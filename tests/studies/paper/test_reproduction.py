@@ -4,6 +4,8 @@ boundary rules."""
 
 from __future__ import annotations
 
+import pytest
+
 from signorini.studies.paper.reproduction import cells, reproduction_stage
 
 
@@ -57,16 +59,43 @@ def test_the_verdicts_and_the_load_rule_follow_the_numbers(tmp_path):
         f"101,sw_ne,{q},all,components,geometric_full,0.0493\n" for q in ("stroud4_acute1", "dunavant8")
     )
     (tmp_path / "conv.csv").write_text(conventions, encoding="utf-8")
-    load = "N,h,norm,default_load,rule_load,relative_change,load_change,kkt_worst,quadrature\n"
-    load += "101,0.0099,L4,1.0,1.0,1.2e-06,2.6e-07,1e-14,stroud4_acute1\n"
+    load = "N,h,norm,default_load,rule_load,relative_change,change_uncertainty,load_change,kkt_worst,quadrature\n"
+    load += "101,0.0099,L4,1.0,1.0,1.2e-06,5e-12,2.6e-07,1e-14,stroud4_acute1\n"
     (tmp_path / "load.csv").write_text(load, encoding="utf-8")
     args = [tmp_path / n for n in ("ours1.csv", "t2.csv", "paper1.csv", "t2.csv", "remarks.md")]
     reproduction_stage(*args, tmp_path / "r.md", conventions=tmp_path / "conv.csv", load_rule=tmp_path / "load.csv")
     text = (tmp_path / "r.md").read_text(encoding="utf-8")
     assert "## The load vector's quadrature rule" in text and "| 1/101 | +1.2e-06 | 2.6e-07 |" in text
+    assert "(1 of 1 changes are resolved)" in text
     assert "**h = 1/201**: stands out" in text and "a steady offset of +0.68 % … +0.95 %" in text
     assert "explains none of the deviations (*measured*)" in text and "therefore explains" not in text
     steady = [r + "," + str(1.0 + d) for r, d in zip(rows, (0.0008, 0.0493, -0.0068, 0.0068, 0.0095), strict=True)]
     (tmp_path / "ours1.csv").write_text("h,L4\n" + "\n".join(steady) + "\n", encoding="utf-8")
     reproduction_stage(*args, tmp_path / "r.md", conventions=tmp_path / "conv.csv", load_rule=tmp_path / "load.csv")
     assert "a steady offset of" not in (tmp_path / "r.md").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize(
+    ("change", "uncertainty", "printed"),
+    [
+        (1.2e-06, 5e-12, "+1.2e-06"),  # far above its round-off: two digits
+        (-8.7e-10, 3e-11, "-9e-10"),  # the second digit within the round-off: one
+        (-8.7e-10, 1.28e-09, "0 ± 2e-09"),  # within it: not resolved, the bound rounded up
+        (1.28e-09, 1.28e-09, "0 ± 2e-09"),  # as large as it: not resolved either
+    ],
+)
+def test_a_load_rule_change_is_printed_to_the_digits_its_round_off_leaves(change, uncertainty, printed):
+    from signorini.studies.paper.reproduction import resolved_change
+
+    assert resolved_change(change, uncertainty) == printed
+
+
+def test_an_unresolved_load_rule_change_is_counted_and_shown_as_such(tmp_path):
+    """The same cell with a round-off bound above it: printed as 0 ± r and not counted as resolved."""
+    from signorini.studies.paper.reproduction import load_rule_section
+
+    load = tmp_path / "load.csv"
+    header = "N,h,norm,default_load,rule_load,relative_change,change_uncertainty,load_change,kkt_worst,quadrature\n"
+    load.write_text(header + "501,0.002,L4,1.0,1.0,-8.7e-10,1.3e-09,2.2e-09,1e-14,q\n", encoding="utf-8")
+    text = load_rule_section(load)
+    assert "| 1/501 | 0 ± 2e-09 | 2.2e-09 |" in text and "(0 of 1 changes are resolved)" in text

@@ -7,7 +7,7 @@ import os
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
-from signorini.formatting import md_table
+from signorini.formatting import ceil_sig, certified_digits, md_table
 from signorini.pipeline.artifacts import atomic_write_text
 from signorini.published import label_md
 from signorini.studies.paper.deviations import STEADY_ROWS, table1_verdicts
@@ -134,8 +134,11 @@ LOAD_RULE = """\
 The paper integrates the right-hand side of (S_h) with the same 16-point rule as the norms; the
 workflow assembles `b = ∫ f φ_i` with scikit-fem's 16-point degree-8 rule. Both solutions below are
 certified; the table gives the relative change of each Table 1 cell when `b` is integrated by the
-norms' rule (`{conventions_rule}`) and the largest change of `b` relative to `max |b|`.
-Source: `{source}`.
+norms' rule (`{conventions_rule}`) and the largest change of `b` relative to `max |b|`. A change
+is known to the round-off the two solves leave in it (the sum of the two values' algebraic-error
+uncertainties, relative to the cell): it is printed to the digits that round-off leaves (at most
+two), and a change no larger than that round-off is not resolved and printed as `0 ± r`, r the
+round-off rounded up ({resolved} of {cells} changes are resolved). Source: `{source}`.
 
 {table}
 """
@@ -149,11 +152,26 @@ def load_rule_section(load_rule_csv: str | os.PathLike) -> str:
     norms = list(dict.fromkeys(frame["norm"]))
     rows = []
     for N, group in frame.groupby("N", sort=True):
-        change = dict(zip(group["norm"], group["relative_change"], strict=True))
-        rows.append([f"1/{int(N)}", *(f"{change[n]:+.1e}" for n in norms), f"{group['load_change'].iloc[0]:.1e}"])
+        change = dict(
+            zip(group["norm"], zip(group["relative_change"], group["change_uncertainty"], strict=True), strict=True)
+        )
+        rows.append(
+            [f"1/{int(N)}", *(resolved_change(*change[n]) for n in norms), f"{group['load_change'].iloc[0]:.1e}"]
+        )
     header = ["h", *(label_md(n) for n in norms), "change of b"]
     rule = frame["quadrature"].iloc[0]
-    return LOAD_RULE.format(conventions_rule=rule, source=load_rule_csv, table=md_table(header, rows))
+    resolved = int((frame["relative_change"].abs() > frame["change_uncertainty"]).sum())
+    return LOAD_RULE.format(
+        conventions_rule=rule, source=load_rule_csv, table=md_table(header, rows), resolved=resolved, cells=len(frame)
+    )
+
+
+def resolved_change(change: float, uncertainty: float) -> str:
+    """A relative change known to ``± uncertainty``: signed, to the digits the uncertainty leaves
+    (at most two), or ``0 ± r`` (``r`` the uncertainty rounded up to one digit) when it is no larger."""
+    if not abs(change) > uncertainty:
+        return f"0 ± {ceil_sig(uncertainty):.0e}"
+    return f"{change:+.{certified_digits(change, uncertainty, cap=2) - 1}e}"
 
 
 def reproduction_stage(
