@@ -249,3 +249,13 @@ def test_the_stage_writes_the_table_and_the_figure(solved, tmp_path):
     assert list(back.columns) == list(table.columns) and len(back) == len(table)
     assert outputs["png"].stat().st_size > 10_000 and outputs["pdf"].stat().st_size > 1000
     assert condition_ah(back)[0] == condition_ah(table)[0]
+
+
+def test_the_sign_margin_is_printed_as_its_order_of_magnitude():
+    """The margins of one mesh on two processors (2.1e5 and 1.9e5: their uncertainties, a first-order
+    estimate of round-off, differ) print alike; a margin below 1 shows as such."""
+    from signorini.studies.theory.report import margin_text
+
+    assert margin_text(205063.2) == margin_text(187994.97) == "≥ 1e+05"
+    assert margin_text(1e5) == "≥ 1e+05" and margin_text(99999.9) == "≥ 1e+04"
+    assert margin_text(0.3) == "≥ 1e-01" and margin_text(float("inf")) == "inf"

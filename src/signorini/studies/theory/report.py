@@ -10,6 +10,7 @@ computed condition and states its strength (``signorini.studies.verdict.STRENGTH
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Mapping, Sequence
 
@@ -93,7 +94,9 @@ between two non-contact nodes (single-node components, which have an empty relat
 contact node where |u_h| ≤ {factor:g} ε ‖u_h‖_∞ (ε the machine epsilon; the factor of the KKT certificate's \
 rounding floor; the exact solvers set u_h to 0 on their active set). The sign margin is the smallest u_h at a \
 boundary node outside Ã_h divided by its uncertainty (algebraic error plus that threshold): above 1, round-off \
-cannot move such a node into Ã_h. Positions on ∂Ω are arc lengths s ∈ [0, 4), counter-clockwise from the corner \
+cannot move such a node into Ã_h. It is printed as the power of ten at or below it: its uncertainty is a first-order \
+estimate of round-off, whose digits another processor changes, so its order of magnitude is what it says. \
+Positions on ∂Ω are arc lengths s ∈ [0, 4), counter-clockwise from the corner \
 (0, 0) (corners at s = 0, 1, 2, 3); an end of Ã_h is a point of its relative boundary in ∂Ω. The exact contact \
 set {{u = 0}} ∩ ∂Ω is ∂Ω \\ ({lo:g}, {x0:g}) × {{0}}: strict contact on ({x0:g}, {hi:g}) × {{0}}, biactive on \
 the rest, {{({x0:g}, 0)}} ∪ ∂Ω \\ ({lo:g}, {hi:g}) × {{0}} (the bottom edge's pieces [0, {lo:g}] and [{hi:g}, 1] \
@@ -260,6 +263,13 @@ def _ends_text(table: pd.DataFrame, N: int) -> str:
     return ", ".join(f"({x:.4f}, {y:.4f})" for x, y in points(ends).T) if ends else "none"
 
 
+def margin_text(margin: float) -> str:
+    """The sign margin as the power of ten at or below it (``≥ 1e+05``); as it is where that is not defined."""
+    if not (math.isfinite(margin) and margin > 0.0):
+        return f"{margin:.1e}"
+    return f"≥ 1e{math.floor(math.log10(margin)):+03d}"
+
+
 def _contact_mesh_rows(table: pd.DataFrame, dist: pd.DataFrame) -> list[str]:
     from signorini.studies.theory.contact import arcs_of
 
@@ -274,7 +284,7 @@ def _contact_mesh_rows(table: pd.DataFrame, dist: pd.DataFrame) -> list[str]:
         lines.append(
             f"| {r.N} | {r.h:.3e} | {len(arcs)} | {sum(a.length == 0 for a in arcs)} | "
             f"{sum(a.nodes for a in arcs)} | {_ends_text(table, r.N)} | {r.hausdorff:.4f} | "
-            f"{r.exact_to_discrete:.4f} | {r.strict_hausdorff:.4f} | {margin:.1e} |"
+            f"{r.exact_to_discrete:.4f} | {r.strict_hausdorff:.4f} | {margin_text(margin)} |"
         )
     return lines
 
