@@ -32,8 +32,8 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _committed(path: str) -> pd.DataFrame:
-    text = subprocess.run(["git", "show", f"HEAD:{path}"], cwd=ROOT, capture_output=True, text=True, check=True).stdout
-    return pd.read_csv(io.StringIO(text))
+    text = subprocess.run(["git", "show", f"HEAD:{path}"], cwd=ROOT, capture_output=True, text=True, encoding="utf-8", check=True).stdout
+    return pd.read_csv(io.StringIO(text), encoding="utf-8")
 
 
 def _artifact(scene: str, N: int, norm: str) -> tuple[float, float] | None:
@@ -92,7 +92,7 @@ def compare() -> dict:
 def _processor() -> dict:
     """The processor's model name and whether it has AVX2 and AVX-512 (what numpy's kernels dispatch on)."""
     cpuinfo = Path("/proc/cpuinfo")
-    lines = cpuinfo.read_text().splitlines() if cpuinfo.exists() else []
+    lines = cpuinfo.read_text(encoding="utf-8").splitlines() if cpuinfo.exists() else []
     fields = dict(line.split(":", 1) for line in lines if ":" in line)
     fields = {key.strip(): value.strip() for key, value in fields.items()}
     flags = set(fields.get("flags", "").split())

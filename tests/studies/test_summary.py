@@ -184,9 +184,9 @@ def test_every_committed_finding_regenerates_from_the_committed_files():
     load = next(line for line in committed.splitlines() if "load vector by the norms' 16-point rule" in line)
     size = load.split("by at most ")[1].split(" relative")[0]
     table = (ROOT / FIGURES["reproduction"]["md"]).read_text(encoding="utf-8").split("## The load vector")[1]
-    cells_printed = [
-        abs(float(c)) for line in table.splitlines() if line.startswith("| 1/") for c in line.split("|")[2:-2]
-    ]
+    cells = [c for line in table.splitlines() if line.startswith("| 1/") for c in line.split("|")[2:-2]]
+    cells_printed = [abs(float(c)) for c in cells if "±" not in c]  # "0 ± r": a change within round-off
+    assert len(cells_printed) < len(cells)
     assert f"{max(cells_printed):.1e}" == size
 
 

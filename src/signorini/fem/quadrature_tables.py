@@ -1,6 +1,7 @@
 """Quadrature rules as scikit-fem and SciPy computed them (hexadecimal floats), so that a job
 evaluating norms needs neither library (their import is most of such a job's time) and gives
-the same bits on every machine (SciPy's last bits depend on the machine).  Written by
+the same bits on every machine (SciPy's last bits depend on the machine:
+docs/evidence/design-measurements.md#quadrature-tables).  Written by
 ``scripts/quadrature_tables.py``; ``tests/fem/test_quadrature_tables.py`` checks every rule
 against the libraries."""
 
