@@ -373,6 +373,7 @@ class GalerkinHierarchy:
             level.presmoother(level.A, x, b)
             residual = b - level.A @ x
         coarse_b = level.R @ residual
+        del residual  # not needed below: one vector less while the coarser levels run
         coarse_x = self._coarse(coarse_b) if lvl == len(self.levels) - 2 else self._cycle(lvl + 1, coarse_b)
         x += level.P @ coarse_x
         if stencil:
@@ -416,6 +417,7 @@ def pcg(
         alpha = rz / pq
         x += alpha * p
         r -= alpha * q
+        del q, z  # rz holds what the old z gave: two vectors less during the V-cycle
         z = precondition(r)
         rz, rz_old = float(r @ z), rz
         p *= rz / rz_old
