@@ -32,7 +32,9 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _committed(path: str) -> pd.DataFrame:
-    text = subprocess.run(["git", "show", f"HEAD:{path}"], cwd=ROOT, capture_output=True, text=True, encoding="utf-8", check=True).stdout
+    text = subprocess.run(
+        ["git", "show", f"HEAD:{path}"], cwd=ROOT, capture_output=True, text=True, encoding="utf-8", check=True
+    ).stdout
     return pd.read_csv(io.StringIO(text), encoding="utf-8")
 
 
