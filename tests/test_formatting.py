@@ -46,6 +46,10 @@ def test_ceil_sig_rounds_a_bound_up_to_one_digit(x, bound):
     assert ceil_sig(x) == bound and ceil_sig(x) >= x
 
 
+def test_ceil_sig_leaves_what_has_no_digit_to_round():
+    assert ceil_sig(0.0) == 0.0 and ceil_sig(math.inf) == math.inf and math.isnan(ceil_sig(math.nan))
+
+
 def test_round_sig_is_what_every_format_prints():
     x = 2.3948826503649732e-05
     assert round_sig(x, 5) == 2.3949e-05 and sig_csv(round_sig(x, 5), 5) == "2.3949e-05"

@@ -39,7 +39,10 @@ def certified_decimals(uncertainty: float, cap: int = EOC_DECIMALS) -> int:
 
 
 def ceil_sig(x: float) -> float:
-    """``x > 0`` rounded up to one significant digit, as ``f"{x:.0e}"`` prints it (a bound stays a bound)."""
+    """``x > 0`` rounded up to one significant digit, as ``f"{x:.0e}"`` prints it (a bound stays a
+    bound); ``x`` itself where that is not defined (zero, negative, NaN, infinite)."""
+    if not (math.isfinite(x) and x > 0.0):
+        return x
     rounded = f"{x:.0e}"
     if float(rounded) >= x:
         return float(rounded)
