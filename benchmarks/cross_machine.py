@@ -22,31 +22,33 @@ import io
 import json
 import os
 import platform
-import subprocess
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from signorini.fem.norms.names import parse_norm_name
+from signorini.pipeline.check import git_reference
+from signorini.studies.scene.store import read_norm, read_quadrature_error, read_uncertainty
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def _committed(path: str) -> pd.DataFrame:
-    text = subprocess.run(
-        ["git", "show", f"HEAD:{path}"], cwd=ROOT, capture_output=True, text=True, encoding="utf-8", check=True
-    ).stdout
-    return pd.read_csv(io.StringIO(text), encoding="utf-8")
+    """The committed version of a table (git's HEAD, read as ``make check`` reads it)."""
+    return pd.read_csv(io.BytesIO(git_reference(ROOT)(path)), encoding="utf-8")
 
 
 def _artifact(scene: str, N: int, norm: str) -> tuple[float, float] | None:
-    """(value, stated uncertainty) of one norm artifact of this checkout, None where absent."""
+    """(value, stated uncertainty) of one norm artifact of this checkout, None where absent: the
+    algebraic-error uncertainty, and for a true norm its quadrature error estimate besides."""
     path = ROOT / f"results/{scene}/N{N}/norms/{norm}.json"
     if not path.exists():
         return None
-    record = json.loads(path.read_text(encoding="utf-8"))
-    uncertainty = record.get("algebraic_error", {}).get("uncertainty", np.nan)
-    uncertainty += record.get("quadrature_error", {}).get("error_estimate", 0.0)
-    return float(record["value"]), float(uncertainty)
+    uncertainty = read_uncertainty(path, norm, N)
+    if parse_norm_name(norm).true:
+        uncertainty += float(read_quadrature_error(path, norm, N)["error_estimate"])
+    return read_norm(path, norm, N), uncertainty
 
 
 def _pairs() -> dict[str, list[tuple[str, int, float]]]:

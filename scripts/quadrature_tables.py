@@ -57,31 +57,19 @@ def render(recompute: bool = False) -> str:
         "# scipy.special.roots_legendre(n): n -> (points, weights) on [-1, 1]",
         "LEGENDRE = {",
     ]
-    kept = {} if recompute else _tabulated()
-    for n in LEGENDRE_N:
-        x, w = kept.get(("legendre", n)) or roots_legendre(n)
+    from signorini.fem import quadrature
+    from signorini.fem.quadrature_tables import JACOBI01, LEGENDRE
+
+    for n in LEGENDRE_N:  # the package's reader of the table, or SciPy for a rule not yet in it
+        x, w = quadrature.roots_legendre(n) if n in LEGENDRE and not recompute else roots_legendre(n)
         lines.append(f"    {n}: ({hex_tuple(x, ' ' * 12)}, {hex_tuple(w, ' ' * 12)}),")
     lines += ["}", "# scipy.special.roots_jacobi(n, 0, 1): n -> (points, weights), weight (1 + x) on [-1, 1]"]
     lines.append("JACOBI01 = {")
     for n in JACOBI_N:
-        x, w = kept.get(("jacobi01", n)) or roots_jacobi(n, 0.0, 1.0)
+        x, w = quadrature.roots_jacobi01(n) if n in JACOBI01 and not recompute else roots_jacobi(n, 0.0, 1.0)
         lines.append(f"    {n}: ({hex_tuple(x, ' ' * 12)}, {hex_tuple(w, ' ' * 12)}),")
     lines.append("}")
     return "\n".join(lines) + "\n"
-
-
-def _tabulated() -> dict[tuple[str, int], tuple[np.ndarray, np.ndarray]]:
-    """The rules the table holds now, as arrays: ("legendre" | "jacobi01", n) -> (points, weights)."""
-    from signorini.fem import quadrature_tables as table
-
-    def floats(hexes: tuple[str, ...]) -> np.ndarray:
-        return np.array([float.fromhex(x) for x in hexes])
-
-    return {
-        (family, n): (floats(points), floats(weights))
-        for family, rules in (("legendre", table.LEGENDRE), ("jacobi01", table.JACOBI01))
-        for n, (points, weights) in rules.items()
-    }
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -160,16 +160,21 @@ def load_rule_section(load_rule_csv: str | os.PathLike) -> str:
         )
     header = ["h", *(label_md(n) for n in norms), "change of b"]
     rule = frame["quadrature"].iloc[0]
-    resolved = int((frame["relative_change"].abs() > frame["change_uncertainty"]).sum())
+    resolved = sum(map(is_resolved, frame["relative_change"], frame["change_uncertainty"]))
     return LOAD_RULE.format(
         conventions_rule=rule, source=load_rule_csv, table=md_table(header, rows), resolved=resolved, cells=len(frame)
     )
 
 
+def is_resolved(change: float, uncertainty: float) -> bool:
+    """Whether a change known to ``± uncertainty`` is larger than it (NaN: not resolved)."""
+    return bool(abs(change) > uncertainty)
+
+
 def resolved_change(change: float, uncertainty: float) -> str:
     """A relative change known to ``± uncertainty``: signed, to the digits the uncertainty leaves
     (at most two), or ``0 ± r`` (``r`` the uncertainty rounded up to one digit) when it is no larger."""
-    if not abs(change) > uncertainty:
+    if not is_resolved(change, uncertainty):
         return f"0 ± {ceil_sig(uncertainty):.0e}"
     return f"{change:+.{certified_digits(change, uncertainty, cap=2) - 1}e}"
 
