@@ -96,7 +96,16 @@ def test_main_against_git_head(tmp_path, capsys):
     (repo / "paper_figures/table1.md").write_text("x\n\n", encoding="utf-8")  # edited after rendering
     assert main(["--root", str(repo), "paper_figures/table2.csv", "paper_figures/table1.md"]) == 1
     out = capsys.readouterr().out
-    assert "not rendered" in out and "bytes differ" in out and "table2.csv" in out
+    assert "not rendered" in out and "bytes differ" in out and "table2.csv" in out and "run `make all`" in out
+    # an input moved aside as damaged: a run of all keeps the rendered file, so the check names the
+    # request that rebuilds the input, after which the file counts as rendered here again
+    os.replace(repo / "results/paper/errors.csv", repo / "results/paper/errors.csv.corrupt")
+    assert main(["--root", str(repo), "paper_figures/table2.csv"]) == 2
+    out = capsys.readouterr().out
+    assert "no longer holds intact; rebuild it: `.venv/bin/snakemake -c2 results/paper/errors.csv`" in out
+    assert "make all" not in out
+    (repo / "results/paper/errors.csv").write_text("N,h\n", encoding="utf-8")
+    assert main(["--root", str(repo), "paper_figures/table2.csv"]) == 0
 
 
 def test_main_without_git_repository_says_what_to_do(tmp_path, capsys):

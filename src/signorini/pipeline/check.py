@@ -179,25 +179,31 @@ def report(results: Sequence[Comparison], source: str) -> str:
     return "\n".join(lines)
 
 
-def not_rendered_here(root: Path, path: str) -> str | None:
-    """Why ``path`` (relative to ``root``) was not rendered on this machine from the current cache
-    (None when it was): no seal, other bytes than its job wrote, or an input now on disk with other
-    content than the job read (another scene, a rebuilt cache) or gone."""
+MAKE_ALL = "run `make all`"
+
+
+def not_rendered_here(root: Path, path: str) -> tuple[str, str] | None:
+    """Why ``path`` (relative to ``root``) was not rendered on this machine from the current cache,
+    and what renders it (None when it was): no seal, other bytes than its job wrote, or an input now
+    on disk with other content than the job read (another scene, a rebuilt cache) or gone.  A gone
+    input (a damaged one that a run moved aside) is rebuilt only when requested: a run of ``all``
+    keeps the rendered file, which was computed from the intact input."""
     from signorini.pipeline.artifacts import CorruptArtifactError, content_digest, seal_broken, seal_of, seal_path
 
     if not (root / path).is_file():
         return None  # a missing file is reported as missing
     if not seal_path(path, root).is_file():
-        return "not rendered by a run here (the committed file?)"
+        return "not rendered by a run here (the committed file?)", MAKE_ALL
     if reason := seal_broken(path, root):
-        return reason
+        return reason, MAKE_ALL
     inputs = ((seal_of(path, root) or {}).get("_provenance") or {}).get("inputs") or {}
     for source, recorded in inputs.items():
         try:
             if content_digest(root / source) != recorded:
-                return f"rendered from another {source} than the cache holds now"
+                return f"rendered from another {source} than the cache holds now", MAKE_ALL
         except (CorruptArtifactError, FileNotFoundError):
-            return f"rendered from {source}, which the cache no longer holds intact"
+            why = f"rendered from {source}, which the cache no longer holds intact"
+            return why, f"rebuild it: `.venv/bin/snakemake -c2 {source}`"
     return None
 
 
@@ -220,7 +226,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     files = args.files or all_outputs()
     elsewhere = {path: why for path in files if (why := not_rendered_here(root, path))}
-    if len(elsewhere) == len(files):
+    if len(elsewhere) == len(files) and {remedy for _, remedy in elsewhere.values()} == {MAKE_ALL}:
         print(
             "check: nothing in paper_figures/ was rendered on this machine from the current cache (it holds the "
             "committed files): run `make all` first",
@@ -229,10 +235,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     results = compare(root, files, reference, args.rtol)
     results = [
-        Comparison(r.path, "not rendered", f"{elsewhere[r.path]}; run `make all`") if r.path in elsewhere else r
-        for r in results
+        Comparison(r.path, "not rendered", "; ".join(elsewhere[r.path])) if r.path in elsewhere else r for r in results
     ]
     print(report(results, source))
+    if len(elsewhere) == len(files):
+        return 2  # nothing was compared that was rendered here
     return 0 if all(r.ok for r in results) else 1
 
 
