@@ -11,7 +11,8 @@ the theory scene's norms, ``_true`` ones included —, ``discretise``, ``solve_d
 this tree in ``--workdir``; the baseline's jobs import ``signorini`` from a git worktree of
 ``--baseline`` (in a temporary directory, removed at the end).  The two trees run alternately,
 ``--repeats`` times each (baseline, tree, baseline, tree, ...), so a drift of the machine's speed
-hits both alike.  Per stage the JSON holds each tree's CPU seconds (every run, the median) and peak
+hits both alike; ``--warm-up`` unrecorded runs of each tree come first (a fresh worktree compiles
+its kernels in its first run).  Per stage the JSON holds each tree's CPU seconds (every run, the median) and peak
 resident memory, ``ratio_cpu``: the median of the pairwise ratios tree / baseline,
 ``ratio_cpu_interval``: the ratio of the two trees' median CPU times with its bootstrap interval and
 verdict (``signorini.intervals``: a tie when the interval contains 1), and the 1-minute load average
@@ -89,6 +90,9 @@ def measure(args: argparse.Namespace, baseline_src: Path) -> dict:
     stages, loads, loaded = {}, [], []
     cores = os.cpu_count() or 1
     for stage in args.stages:
+        for _ in range(args.warm_up):  # not recorded: compiles each tree's kernels into its cache
+            for src in trees.values():
+                run_job(stage, args.N, args.workdir, src, args.timeout)
         runs: dict[str, list[dict]] = {"baseline": [], "tree": []}
         for k in range(args.repeats):
             for tree, src in trees.items():
@@ -112,6 +116,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--N", type=int, default=1001)
     parser.add_argument("--stages", nargs="+", default=["theory_quantities", "L4", "Linf", "W14", "L4_true"])
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument(
+        "--warm-up", type=int, default=0, help="unrecorded runs of each tree per stage first (its compiled kernels)"
+    )
     parser.add_argument("--workdir", type=Path, default=ROOT / "results/benchmarks/scale")
     parser.add_argument("--timeout", type=float, default=1800.0, help="per job, seconds")
     parser.add_argument("--out", type=Path, default=ROOT / "docs/evidence/stage_jobs.json")
@@ -142,6 +149,7 @@ def main(argv: list[str] | None = None) -> int:
         "baseline": revision.strip(),
         "tree": head.strip() + (" (with uncommitted changes in src/)" if dirty.strip() else ""),
         "repeats": args.repeats,
+        "warm_up": args.warm_up,
         **result,
         "wall_s": time.time() - t0,
     }

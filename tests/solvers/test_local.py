@@ -14,8 +14,9 @@ from signorini.fem.discrete import build
 from signorini.fem.problem import Problem
 from signorini.fem.solve import cascade_start, solve_discrete
 from signorini.solvers import active_set_solve, multigrid_solve
-from signorini.solvers.local import PATCH_MAX_FRACTION, concatenated_ranges, neighbourhood, patch_problem
+from signorini.solvers.local import PATCH_MAX_FRACTION, neighbourhood, patch_problem
 from signorini.solvers.pdas import MAX_SETTLES, initial_active, iterate, prepare_qp
+from signorini.solvers.stencil import concatenated_ranges
 
 log = logging.getLogger(__name__)
 AGREEMENT = 1e-12  # max |u - u_direct| / max |u_direct|, as the multigrid route's tests

@@ -109,7 +109,6 @@ class BorderedSolver:
         return u
 
 
-
 class DirectSystems:
     """The Newton systems of the direct route (``pdas.NewtonSystems``): a factorisation of the
     first clamped matrix, bordered updates for later sets, a new factorisation on a large change

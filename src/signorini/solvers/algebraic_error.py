@@ -17,6 +17,7 @@ import scipy.sparse as sp
 from signorini.solvers.certificate import _TINY
 from signorini.solvers.linalg import factorize
 from signorini.solvers.multigrid import GalerkinHierarchy, pcg
+from signorini.solvers.stencil import StencilOperator, as_csr
 
 # the correction is an estimate (used with a safety factor): CG to this energy-relative accuracy
 ESTIMATE_RTOL = 1e-3
@@ -50,7 +51,7 @@ class AlgebraicError:
 
 
 def linearised_error(
-    A: sp.spmatrix,
+    A: sp.spmatrix | StencilOperator,
     b: np.ndarray,
     constrained: np.ndarray,
     u: np.ndarray,
@@ -63,7 +64,7 @@ def linearised_error(
     ``A`` with the contact rows and columns replaced by the identity, solved by one sparse
     factorisation (the direct route, ``route="direct"``) or by multigrid-preconditioned CG (``"multigrid"``),
     with the solver's own ``hierarchy`` when given (``SolveResult.hierarchy``: no second set-up)."""
-    A = sp.csr_matrix(A)
+    A = A if isinstance(A, StencilOperator) else sp.csr_matrix(A)  # a stencil operator: ``multigrid.compact``
     free = np.ones(u.size, dtype=bool)
     free[np.asarray(active, dtype=np.int64)] = False
     lam_full = np.zeros_like(u)
@@ -73,19 +74,21 @@ def linearised_error(
         delta = _multigrid_correction(A, free, r, hierarchy)
     else:
         keep = sp.diags(free.astype(float))
-        clamped = (keep @ A @ keep + sp.diags((~free).astype(float))).tocsr()
+        clamped = (keep @ as_csr(A) @ keep + sp.diags((~free).astype(float))).tocsr()
         delta = np.asarray(factorize(clamped)(r), dtype=float)
     delta[~free] = 0.0
     return AlgebraicError(delta=delta, energy=float(np.sqrt(max(float(r @ delta), 0.0))))
 
 
 def _multigrid_correction(
-    A: sp.csr_matrix, free: np.ndarray, r: np.ndarray, hierarchy: GalerkinHierarchy | None
+    A: sp.csr_matrix | StencilOperator, free: np.ndarray, r: np.ndarray, hierarchy: GalerkinHierarchy | None
 ) -> np.ndarray:
     """``Ã⁻¹ r`` by CG with the multigrid route's Galerkin hierarchy for the clamped matrix ``Ã``."""
     if not r.any():
         return np.zeros_like(r)
     hierarchy = GalerkinHierarchy(A) if hierarchy is None else hierarchy
     hierarchy.update(free)
-    delta, _, _ = pcg(hierarchy.matrix, r, np.zeros_like(r), hierarchy, ESTIMATE_RTOL, ESTIMATE_MAX_CG)
+    delta, _, _ = pcg(
+        hierarchy.matrix, r, np.zeros_like(r), hierarchy, ESTIMATE_RTOL, ESTIMATE_MAX_CG, overwrite_x=True
+    )
     return delta

@@ -105,7 +105,7 @@ def kkt_certificate(
     sigma = max(np.abs(Au).max(initial=0.0), np.abs(b).max(initial=0.0), _TINY)
     unorm = max(np.abs(u).max(initial=0.0), _TINY)
     uB = u[constrained]
-    rounding = abs_product(sp.csr_matrix(A), np.abs(u)).max(initial=0.0)  # ‖|A||u|‖∞
+    rounding = abs_product(A, np.abs(u)).max(initial=0.0)  # ‖|A||u|‖∞
     floor = ROUNDOFF_FACTOR * np.finfo(float).eps * float(rounding) / sigma
     return Certificate(
         stationarity=float(np.abs(Au - b - lam_full).max(initial=0.0) / sigma),
@@ -130,10 +130,14 @@ COMPILED_MIN_UNKNOWNS = 1 << 21
 ABS_CHUNK_ROWS = 1 << 20  # rows of |A| formed at a time by numpy's ``abs_product``
 
 
-def abs_product(A: sp.csr_matrix, y: np.ndarray) -> np.ndarray:
-    """``|A| y`` for a CSR matrix, each row summed in CSR order from 0.0 as ``abs(A) @ y`` sums it,
+def abs_product(A: sp.spmatrix, y: np.ndarray) -> np.ndarray:
+    """``|A| y`` for a sparse matrix, each row summed in CSR order from 0.0 as ``abs(A) @ y`` sums it,
     without forming ``|A|`` (at N = 4001 a copy of ``A`` is 1.3 GB): compiled for large matrices,
-    else a block of rows at a time."""
+    else a block of rows at a time.  An operator that stands in for a matrix
+    (``solvers.stencil.StencilOperator``) computes it itself, in the same order."""
+    if hasattr(A, "abs_product"):
+        return A.abs_product(y)
+    A = sp.csr_matrix(A)
     out = np.empty(A.shape[0])
     y = np.ascontiguousarray(y, dtype=float)
     if A.shape[0] >= COMPILED_MIN_UNKNOWNS:

@@ -93,6 +93,64 @@ def apply(x, b, out, residual, kind, offsets, values, ex_indptr, ex_indices, ex_
 
 
 @numba.njit(cache=True)
+def restricted_residual(
+    x, b, kind, offsets, values, ex_indptr, ex_indices, ex_data, p_indptr, p_indices, p_data, coarse
+):  # pragma: no cover - compiled
+    """``coarse += Pᵀ (b - A x)`` of a stencil operator and a CSR prolongation ``P``, the residual
+    formed a row at a time as ``apply`` forms it and scattered as scipy's product with the
+    transpose (``csc_matvec``: row by row of ``P``, in its stored order), so ``b - A x`` is never
+    held."""
+    for i in range(kind.size):
+        row, total = kind[i], 0.0
+        if row < 0:
+            for k in range(len(offsets)):
+                total += values[k] * x[i + offsets[k]]
+        else:
+            for jj in range(ex_indptr[row], ex_indptr[row + 1]):
+                total += ex_data[jj] * x[ex_indices[jj]]
+        residual = b[i] - total
+        for kk in range(p_indptr[i], p_indptr[i + 1]):
+            coarse[p_indices[kk]] += p_data[kk] * residual
+
+
+@numba.njit(cache=True)
+def axpy(y, a, x, subtract):  # pragma: no cover - compiled
+    """``y += a x`` (or ``y -= a x``) in place, rounded as numpy's ``y += a * x`` rounds: the
+    product, then the sum."""
+    for i in range(y.size):
+        if subtract:
+            y[i] -= a * x[i]
+        else:
+            y[i] += a * x[i]
+
+
+@numba.njit(cache=True)
+def stencil_csr_data(indptr, kind, values, ex_indptr, ex_data, lo, hi, out):  # pragma: no cover - compiled
+    """The stored values of rows ``lo:hi`` of a stencil operator in its CSR pattern, into ``out``
+    (the positions ``indptr[lo]:indptr[hi]``)."""
+    first = indptr[lo]
+    for i in range(lo, hi):
+        row, at = kind[i], indptr[i] - first
+        if row < 0:
+            for k in range(values.size):
+                out[at + k] = values[k]
+        else:
+            for jj in range(ex_indptr[row], ex_indptr[row + 1]):
+                out[at + jj - ex_indptr[row]] = ex_data[jj]
+
+
+@numba.njit(cache=True)
+def prolongate_add(indptr, indices, data, y, x):  # pragma: no cover - compiled
+    """``x += P y`` of a CSR matrix ``P`` without ``P y`` in memory: each row of ``P y`` summed in
+    CSR order from 0.0 (scipy's ``csr_matvec``), then added, as ``x += P @ y`` rounds."""
+    for i in range(x.size):
+        total = 0.0
+        for jj in range(indptr[i], indptr[i + 1]):
+            total += data[jj] * y[indices[jj]]
+        x[i] += total
+
+
+@numba.njit(cache=True)
 def gauss_seidel(
     x, b, start, stop, step, kind, offsets, values, diagonal, ex_indptr, ex_indices, ex_data
 ):  # pragma: no cover

@@ -30,21 +30,14 @@ import numpy as np
 import scipy.sparse as sp
 
 from signorini.solvers.certificate import KKTError, NotConvergedError
+from signorini.solvers.stencil import StencilOperator, concatenated_ranges, entries
 
 PATCH_MIN_LEVELS = 32  # a patch reaches at least this many graph neighbours beyond the released nodes
 PATCH_REACH = 4  # … and this many times as far as nodes were released (the end may move as far again)
 PATCH_MAX_FRACTION = 1 / 16  # a larger patch is not local: the global iteration goes on instead
 
 
-def concatenated_ranges(starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
-    """The concatenated ranges ``starts[k]:ends[k]`` (with a CSR matrix's ``indptr``: the positions
-    of the stored entries of rows)."""
-    lengths = ends - starts
-    offsets = np.repeat(starts - np.concatenate([[0], np.cumsum(lengths)[:-1]]), lengths)
-    return np.arange(int(lengths.sum())) + offsets
-
-
-def neighbourhood(A: sp.csr_matrix, seeds: np.ndarray, levels: int, limit: int) -> np.ndarray | None:
+def neighbourhood(A: sp.csr_matrix | StencilOperator, seeds: np.ndarray, levels: int, limit: int) -> np.ndarray | None:
     """The mask of the nodes within ``levels`` steps of ``seeds`` in the graph of ``A``, or None
     once they exceed ``limit`` nodes.  Work in O(the nodes found), besides the mask."""
     inside = np.zeros(A.shape[0], dtype=bool)
@@ -63,7 +56,7 @@ def neighbourhood(A: sp.csr_matrix, seeds: np.ndarray, levels: int, limit: int) 
 
 
 def patch_problem(
-    A: sp.csr_matrix, b: np.ndarray, u: np.ndarray, patch: np.ndarray, inside: np.ndarray
+    A: sp.csr_matrix | StencilOperator, b: np.ndarray, u: np.ndarray, patch: np.ndarray, inside: np.ndarray
 ) -> tuple[sp.csr_matrix, np.ndarray]:
     """The matrix ``A`` restricted to the sorted nodes ``patch`` (``inside`` their mask) and the load
     with the rest of ``u`` as Dirichlet data, ``b_p - A_{p,outside} u_outside``.  Work in O(the
@@ -71,7 +64,7 @@ def patch_problem(
     starts, ends = A.indptr[patch], A.indptr[patch + 1]
     positions = concatenated_ranges(starts, ends)
     row = np.repeat(np.arange(patch.size), ends - starts)
-    cols, data = A.indices[positions], A.data[positions]
+    cols, data = A.indices[positions], entries(A, positions, patch[row])
     keep = inside[cols]
     outside = np.bincount(row[~keep], weights=data[~keep] * u[cols[~keep]], minlength=patch.size)
     indptr = np.concatenate([[0], np.cumsum(np.bincount(row[keep], minlength=patch.size))])
@@ -80,7 +73,7 @@ def patch_problem(
 
 
 def settle_release(
-    A: sp.csr_matrix,
+    A: sp.csr_matrix | StencilOperator,
     b: np.ndarray,
     B: np.ndarray,
     u: np.ndarray,

@@ -79,9 +79,10 @@ import scipy.sparse as sp
 
 from signorini.solvers import certificate, pdas
 from signorini.solvers.certificate import KKTError, NotConvergedError, abs_product
-from signorini.solvers.local import concatenated_ranges, settle_release
+from signorini.solvers.local import settle_release
 from signorini.solvers.pdas import StepCallback, certified_result, clamped_values, initial_active, iterate, prepare_qp
 from signorini.solvers.result import SolveResult
+from signorini.solvers.stencil import StencilOperator, as_csr, concatenated_ranges, residual
 
 log = logging.getLogger(__name__)
 
@@ -90,13 +91,14 @@ REFINEMENTS = 2  # CG restarts from the true residual after an accurate solve, a
 FLOOR_FACTOR = 8.0  # the true residual of a converged solve is ~2 ε |A||x| (max norm)
 STEP_REDUCTION = 0.1  # an inexact solve reduces its starting energy residual at least this much
 NESTED_MIN_CELLS = 24  # a cold start solves the coarse grid's problem first if it has this many cells
+GALERKIN_BLOCK_ROWS = 1 << 18  # coarse rows of R A P formed at a time (``galerkin_product``)
 SMOOTHERS = {
     "presmoother": ("gauss_seidel", {"sweep": "forward"}),
     "postsmoother": ("gauss_seidel", {"sweep": "backward"}),
 }
 
 
-def fk_grid(A: sp.csr_matrix) -> tuple[int, str] | None:
+def fk_grid(A: sp.csr_matrix | StencilOperator) -> tuple[int, str] | None:
     """The Friedrichs–Keller grid ``(N, diagonal)`` whose vertex numbering ``A`` follows (vertex
     (i, j) is unknown i (N + 1) + j, ``signorini.fem.mesh``), read off the matrix: (N + 1)²
     unknowns, and couplings only to the same and the neighbouring grid lines.  The diagonal is the
@@ -123,6 +125,38 @@ def fk_grid(A: sp.csr_matrix) -> tuple[int, str] | None:
     if sw_ne and nw_se:
         return None
     return N, "nw_se" if nw_se else "sw_ne"
+
+
+def compact(A: sp.csr_matrix) -> sp.csr_matrix | StencilOperator:
+    """A Friedrichs–Keller matrix (``fk_grid``) of at least ``COMPILED_MIN_UNKNOWNS`` rows with
+    sorted indices as the stencil of its centre row and the rows that differ
+    (``solvers.stencil``), which the multigrid route solves with to the same bits without ``A``'s
+    values in memory (0.84 GiB at N = 4001; docs/evidence/design-measurements.md#solve-without-matrix-values);
+    any other matrix as it is."""
+    if A.shape[0] < certificate.COMPILED_MIN_UNKNOWNS or not A.has_sorted_indices or (grid := fk_grid(A)) is None:
+        return A
+    side = grid[0] + 1
+    return StencilOperator.from_csr(A, side * (side // 2) + side // 2) or A
+
+
+def galerkin_product(A: sp.csr_matrix | StencilOperator, P: sp.csr_matrix, R: sp.csr_matrix) -> sp.csr_matrix:
+    """``R (A P)`` as scipy forms it, bit for bit, ``GALERKIN_BLOCK_ROWS`` rows of ``R`` at a time:
+    each block reads a range of fine rows, and the rows of ``A P`` in it are formed alone (a row
+    of a product depends only on the same row of its left factor, and scipy sums it in the same
+    order), so ``A P`` (1 GB at N = 4001) is never held whole.  ``A``: CSR, or a stencil operator
+    whose rows are formed a block at a time (``rows_csr``)."""
+    if R.shape[0] <= GALERKIN_BLOCK_ROWS:
+        return (R @ (as_csr(A) @ P)).tocsr()
+    blocks = []
+    for lo in range(0, R.shape[0], GALERKIN_BLOCK_ROWS):
+        hi = min(lo + GALERKIN_BLOCK_ROWS, R.shape[0])
+        first, last = R.indptr[lo], R.indptr[hi]
+        cols = R.indices[first:last]
+        j0, j1 = int(cols.min()), int(cols.max()) + 1
+        rows = A.rows_csr(j0, j1) if isinstance(A, StencilOperator) else A[j0:j1]
+        block = sp.csr_matrix((R.data[first:last], cols - j0, R.indptr[lo : hi + 1] - first), shape=(hi - lo, j1 - j0))
+        blocks.append(block @ (rows @ P))
+    return sp.vstack(blocks, format="csr")
 
 
 def coarse_lines(lines: np.ndarray) -> np.ndarray:
@@ -184,7 +218,7 @@ def fk_transfer(lines: np.ndarray, coarse: np.ndarray, diagonal: str) -> sp.csr_
 Grid = tuple[np.ndarray, str]  # the grid lines (positions on the finest grid) and the diagonal
 
 
-def _geometric_levels(A: sp.csr_matrix, grid: Grid, max_coarse: int) -> tuple[list, sp.csr_matrix]:
+def _geometric_levels(A: sp.csr_matrix | StencilOperator, grid: Grid, max_coarse: int) -> tuple[list, sp.csr_matrix]:
     """The levels of grid halving (``coarse_lines``) from ``A`` on ``grid`` until at most
     ``max_coarse`` unknowns are left, and the coarsest (Galerkin) operator."""
     from pyamg.multilevel import MultilevelSolver
@@ -195,14 +229,16 @@ def _geometric_levels(A: sp.csr_matrix, grid: Grid, max_coarse: int) -> tuple[li
         level = MultilevelSolver.Level()
         level.A, level.P = A, fk_transfer(lines, coarse, diagonal)
         level.R = level.P.T.tocsr()
-        # scipy's product: a compiled one without A P in memory saved no time
+        # scipy's product, a block of coarse rows at a time: a compiled one saved no time
         # (docs/evidence/design-measurements.md#galerkin-product-by-scipy)
-        A, lines = (level.R @ (A @ level.P)).tocsr(), coarse
+        A, lines = galerkin_product(A, level.P, level.R), coarse
         levels.append(level)
     return levels, A
 
 
-def hierarchy(A: sp.csr_matrix, kind: str = "geometric", max_coarse: int = 500, grid: Grid | None = None):
+def hierarchy(
+    A: sp.csr_matrix | StencilOperator, kind: str = "geometric", max_coarse: int = 500, grid: Grid | None = None
+):
     """A pyamg multilevel hierarchy of the symmetric positive (semi)definite ``A`` down to at most
     ``max_coarse`` unknowns, with forward Gauss–Seidel as presmoother and backward Gauss–Seidel
     as postsmoother.  ``geometric``: where ``A`` is a Friedrichs–Keller matrix (``fk_grid``), or
@@ -219,10 +255,9 @@ def hierarchy(A: sp.csr_matrix, kind: str = "geometric", max_coarse: int = 500, 
         grid = None
     elif grid is None and (read := fk_grid(A)) is not None:
         grid = (np.arange(read[0] + 1), read[1])
-    if kind == "smoothed_aggregation":
-        solver = pyamg.smoothed_aggregation_solver(A, max_coarse=max_coarse, keep=False, **SMOOTHERS)
-    elif grid is None:
-        solver = pyamg.ruge_stuben_solver(A, max_coarse=max_coarse, keep=False, **SMOOTHERS)
+    if kind == "smoothed_aggregation" or grid is None:  # algebraic: from the CSR matrix
+        build = pyamg.smoothed_aggregation_solver if kind == "smoothed_aggregation" else pyamg.ruge_stuben_solver
+        solver = build(as_csr(A), max_coarse=max_coarse, keep=False, **SMOOTHERS)
     else:
         levels, coarsest = _geometric_levels(A, grid, max_coarse)
         solver = MultilevelSolver([*levels, MultilevelSolver.Level()])
@@ -247,8 +282,14 @@ class GalerkinHierarchy:
     """The transfers of one hierarchy of ``A``; the operators Galerkin for the clamped matrix
     ``Ã(F)`` of the current free set F (``update``), and ``z = M r`` one V-cycle (``__call__``)."""
 
-    def __init__(self, A: sp.csr_matrix, kind: str = "geometric", max_coarse: int = 500, grid: Grid | None = None):
-        self.A = A
+    def __init__(
+        self,
+        A: sp.csr_matrix | StencilOperator,
+        kind: str = "geometric",
+        max_coarse: int = 500,
+        grid: Grid | None = None,
+    ):
+        self.A = A  # every node free; a stencil operator stands in for the CSR matrix (``compact``)
         solver = hierarchy(A, kind, max_coarse, grid)
         self.levels, self.grid = solver.levels, solver.grid
         for level in self.levels[:-1]:  # smoothed aggregation's transfers are BSR
@@ -266,7 +307,11 @@ class GalerkinHierarchy:
         self.levels[0].A = A
         self.stencil_levels = self._stencils()
         if not self.stencil_levels[0]:
-            self.levels[0].A = sp.csr_matrix((A.data.copy(), A.indices, A.indptr), shape=A.shape)
+            self.levels[0].A = (
+                A.tocsr()
+                if isinstance(A, StencilOperator)
+                else sp.csr_matrix((A.data.copy(), A.indices, A.indptr), shape=A.shape)
+            )
         self.free = np.ones(A.shape[0], dtype=bool)  # A itself: every node free
         self.cycles = 0  # V-cycles applied (``__call__``)
         self._factor_coarsest()
@@ -280,9 +325,9 @@ class GalerkinHierarchy:
             return found
         lines = self.grid[0]
         for k, level in enumerate(self.levels[:-1]):
-            if level.A.shape[0] >= certificate.COMPILED_MIN_UNKNOWNS:
-                from signorini.solvers.stencil import StencilOperator
-
+            if isinstance(level.A, StencilOperator):  # the fine operator given as one: changed apart
+                level.A, found[k] = level.A.copy(), True
+            elif level.A.shape[0] >= certificate.COMPILED_MIN_UNKNOWNS:
                 side = lines.size
                 op = StencilOperator.from_csr(level.A, side * (side // 2) + side // 2)
                 if op is not None:
@@ -366,19 +411,20 @@ class GalerkinHierarchy:
         level = self.levels[lvl]
         x = np.zeros_like(b)
         stencil = self.stencil_levels[lvl]  # the same sweeps and sums, row by row
-        if stencil:
+        if stencil:  # the residual restricted a row at a time: never held
             level.A.gauss_seidel(x, b, forward=True, from_zero=True)
-            residual = level.A.residual(x, b)
+            coarse_b = level.A.restricted_residual(x, b, level.P)
         else:
             level.presmoother(level.A, x, b)
-            residual = b - level.A @ x
-        coarse_b = level.R @ residual
-        del residual  # not needed below: one vector less while the coarser levels run
+            coarse_b = level.R @ (b - level.A @ x)
         coarse_x = self._coarse(coarse_b) if lvl == len(self.levels) - 2 else self._cycle(lvl + 1, coarse_b)
-        x += level.P @ coarse_x
-        if stencil:
+        if stencil:  # x += P coarse_x without P coarse_x in memory, the same sums
+            from signorini.solvers.kernels import prolongate_add
+
+            prolongate_add(level.P.indptr, level.P.indices, level.P.data, coarse_x, x)
             level.A.gauss_seidel(x, b, forward=False)
         else:
+            x += level.P @ coarse_x
             level.postsmoother(level.A, x, b)
         return x
 
@@ -392,15 +438,17 @@ def pcg(
     max_iter: int,
     reduction: float | None = None,
     floor: float = 0.0,
+    overwrite_x: bool = False,
 ) -> tuple[np.ndarray, int, float]:
     """Preconditioned CG from ``x`` until ``√(rᵀMr) ≤ rtol √(xᵀ rhs)`` (energy-relative, module
     docstring): ``(x, iterations, √(rᵀMr)/√(xᵀ rhs))``.  With ``reduction``, ``rtol`` is lowered to
-    ``reduction`` times the initial ratio, but not below ``floor``.  Raises ``NotConvergedError``
+    ``reduction`` times the initial ratio, but not below ``floor``; with ``overwrite_x`` the
+    iterate is ``x`` itself, updated in place (no copy).  Raises ``NotConvergedError``
     after ``max_iter`` iterations or on a breakdown (``pᵀAp ≤ 0``: A is not positive definite)."""
-    x = x.copy()
-    r = rhs - A @ x
-    z = precondition(r)
-    p, rz = z.copy(), float(r @ z)
+    x = x if overwrite_x else x.copy()
+    r = residual(A, x, rhs)
+    p = precondition(r)  # the first direction: the preconditioned residual itself
+    rz = float(r @ p)
     for k in range(max_iter + 1):
         energy = float(x @ rhs)
         ratio = np.sqrt(max(rz, 0.0) / energy) if energy > 0.0 else np.inf
@@ -415,14 +463,26 @@ def pcg(
         if not pq > 0.0:
             raise NotConvergedError(f"conjugate gradients broke down (pᵀAp = {pq:.1e}): the system is singular")
         alpha = rz / pq
-        x += alpha * p
-        r -= alpha * q
-        del q, z  # rz holds what the old z gave: two vectors less during the V-cycle
+        _add(x, alpha, p)
+        _add(r, -alpha, q)
+        del q  # one vector less during the V-cycle
         z = precondition(r)
         rz, rz_old = float(r @ z), rz
         p *= rz / rz_old
         p += z
+        del z  # rz holds what it gave: one vector less in the next step's products
     raise NotConvergedError(f"conjugate gradients did not reach {rtol:.0e} within {max_iter} iterations")
+
+
+def _add(y: np.ndarray, a: float, x: np.ndarray) -> None:
+    """``y += a x`` rounded as numpy rounds it; in place, without ``a x`` in memory, where the
+    compiled kernels pay (a negative ``a``: the subtraction of ``|a| x``, the same bits)."""
+    if y.size < certificate.COMPILED_MIN_UNKNOWNS:
+        y += a * x
+        return
+    from signorini.solvers.kernels import axpy
+
+    axpy(y, abs(a), x, a < 0.0)
 
 
 class MultigridSystems:
@@ -431,7 +491,7 @@ class MultigridSystems:
 
     exact = False
 
-    def __init__(self, A: sp.csr_matrix, b: np.ndarray, start: np.ndarray, options: dict):
+    def __init__(self, A: sp.csr_matrix | StencilOperator, b: np.ndarray, start: np.ndarray, options: dict):
         self.A, self.b, self.x = A, b, start
         self.tol, self.inner_rtol, self.max_cg_iter = options["tol"], options["inner_rtol"], options["max_cg_iter"]
         ones = np.ones(b.size)
@@ -451,11 +511,12 @@ class MultigridSystems:
         """Restart CG from the true residual while it exceeds its rounding floor (max norm)."""
         At, iterations = self.hierarchy.matrix, 0
         for _ in range(REFINEMENTS):
-            floor = FLOOR_FACTOR * np.finfo(float).eps * np.where(free, abs_product(self.A, np.abs(x)), 0.0).max()
+            floor = FLOOR_FACTOR * np.finfo(float).eps * np.max(abs_product(self.A, np.abs(x)), where=free, initial=0.0)
             self.products += 2  # |A| |x| and the residual
-            if np.abs(rhs - At @ x).max() <= floor:
+            misfit = residual(At, x, rhs)
+            if np.abs(misfit, out=misfit).max() <= floor:
                 break
-            x, k, _ = pcg(At, rhs, x, self.hierarchy, self.tol, self.max_cg_iter)
+            x, k, _ = pcg(At, rhs, x, self.hierarchy, self.tol, self.max_cg_iter, overwrite_x=True)
             iterations += k
             self.products += k + 1
         return x, iterations
@@ -476,7 +537,10 @@ class MultigridSystems:
             # of a few nodes moves the energy by less than inner_rtol, but the nodes next to it a lot)
             rtol, reduction = (self.tol, None) if accurate else (self.inner_rtol, STEP_REDUCTION)
             At, start = self.hierarchy.matrix, np.where(free, self.x, 0.0)
-            x, iterations, ratio = pcg(At, rhs, start, self.hierarchy, rtol, self.max_cg_iter, reduction, self.tol)
+            self.x = None  # the previous iterate, in ``start`` now: one vector less while CG runs
+            x, iterations, ratio = pcg(
+                At, rhs, start, self.hierarchy, rtol, self.max_cg_iter, reduction, self.tol, overwrite_x=True
+            )
             self.products += iterations + 1
         if accurate:
             x, more = self._refine(rhs, x, free)
@@ -549,8 +613,11 @@ def nested_start(H: GalerkinHierarchy, b: np.ndarray, B: np.ndarray, options: di
     level, operator = H.levels[0], H.levels[1].A
     try:
         coarse_result = multigrid_solve(
-            operator.tocsr() if H.stencil_levels[1] else operator.copy(), level.R @ b,
-            np.flatnonzero(constrained[fine_vertex]), **options, grid=(coarse, diagonal),
+            operator.tocsr() if H.stencil_levels[1] else operator.copy(),
+            level.R @ b,
+            np.flatnonzero(constrained[fine_vertex]),
+            **options,
+            grid=(coarse, diagonal),
         )
     except (NotConvergedError, KKTError) as err:
         log.warning("nested start on %d cells failed (%s); solving from the plain cold start", coarse.size - 1, err)
@@ -559,7 +626,7 @@ def nested_start(H: GalerkinHierarchy, b: np.ndarray, B: np.ndarray, options: di
 
 
 def multigrid_solve(
-    A: sp.spmatrix,
+    A: sp.spmatrix | StencilOperator,
     b: np.ndarray,
     constrained: np.ndarray,
     warm_start: np.ndarray | None = None,
@@ -579,7 +646,9 @@ def multigrid_solve(
     grid: Grid | None = None,
 ) -> SolveResult:
     """Solve ``min ½ uᵀAu - bᵀu`` s.t. ``u_B ≥ 0`` by the active-set iteration with multigrid-
-    preconditioned CG (module docstring) and certify it.
+    preconditioned CG (module docstring) and certify it.  ``A``: a sparse matrix, or the stencil
+    operator standing in for a Friedrichs–Keller one (``compact``), solved with the same bits
+    without a copy of its values.
 
     ``warm_start``: the first iterate, its zeros the first contact set; without one, the solution
     of the problem on the hierarchy's coarse grid (``nested_start``) where there is one, else
@@ -605,7 +674,7 @@ def multigrid_solve(
         raise ValueError(f"need 0 < tol <= inner_rtol, got tol={tol}, inner_rtol={inner_rtol}")
     if warm_start_reach < 1:
         raise ValueError(f"need warm_start_reach >= 1 (nodes), got {warm_start_reach}")
-    A, b, B = prepare_qp(A, b, constrained)
+    A, b, B = prepare_qp(A, b, constrained, keep_stencil=True)
     shared = dict(amg=amg, tol=tol, inner_rtol=inner_rtol, max_cg_iter=max_cg_iter, max_coarse=max_coarse)
     systems = MultigridSystems(A, b, np.zeros_like(b), shared | {"grid": grid, "B": B, "kkt_tol": kkt_tol})
     settle = systems.settle if local_release else None

@@ -26,6 +26,7 @@ import scipy.sparse as sp
 
 from signorini.solvers.certificate import KKTError, NotConvergedError, check_qp_data, kkt_certificate
 from signorini.solvers.result import SolveResult
+from signorini.solvers.stencil import StencilOperator, as_csr, entries
 
 StepCallback = Callable[[dict], None]
 # settles a release: (u, the set before the step, the set after it) -> (u, set, row of counters) | None
@@ -49,10 +50,18 @@ class NewtonSystems(Protocol):
         """The route's counters after the last solve (a row of the history)."""
 
 
-def prepare_qp(A: sp.spmatrix, b: np.ndarray, constrained: np.ndarray) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray]:
+def prepare_qp(
+    A: sp.spmatrix | StencilOperator, b: np.ndarray, constrained: np.ndarray, keep_stencil: bool = False
+) -> tuple[sp.csr_matrix | StencilOperator, np.ndarray, np.ndarray]:
     """``A`` as CSR with sorted, summed indices, ``b`` and ``B`` as arrays, checked.  A CSR matrix in
     that form already is used as it is (no route changes ``A``: at N = 4001 a copy is 1.3 GB);
-    any other is copied first, so the caller's matrix is never changed."""
+    any other is copied first, so the caller's matrix is never changed.  An operator standing in
+    for ``A`` (``solvers.stencil``) is checked through its CSR copy, and kept as it is where the
+    route solves with it (``keep_stencil``: the multigrid route)."""
+    if isinstance(A, StencilOperator):
+        csr = A.tocsr()
+        csr, b, B = prepare_qp(csr, b, constrained)
+        return (A if keep_stencil else csr), b, B
     A = sp.csr_matrix(A)  # the same matrix for a CSR input
     if not A.has_canonical_format:
         A = A.copy()
@@ -65,22 +74,26 @@ def prepare_qp(A: sp.spmatrix, b: np.ndarray, constrained: np.ndarray) -> tuple[
 
 
 def clamped_values(
-    A: sp.csr_matrix, rows: np.ndarray, free: np.ndarray, positions: np.ndarray | None = None
+    A: sp.csr_matrix | StencilOperator, rows: np.ndarray, free: np.ndarray, positions: np.ndarray | None = None
 ) -> np.ndarray:
     """CSR values of Ã = D A D + (I - D) in ``A``'s own sparsity pattern (explicit zeros kept,
     so every active set shares one symbolic factorisation or one matrix layout); ``rows`` is the
     row of each stored entry.  With ``positions``: the values at those positions of ``A.data``,
     ``rows`` the row of each of them."""
-    pos = slice(None) if positions is None else positions
+    if positions is None:  # every stored entry
+        pos, values = slice(None), as_csr(A).data
+    else:
+        pos, values = positions, entries(A, positions, rows)
     r, c = rows, A.indices[pos]
-    data = np.where(free[r] & free[c], A.data[pos], 0.0)
+    data = np.where(free[r] & free[c], values, 0.0)
     data[(r == c) & ~free[r]] = 1.0
     return data
 
 
-def boundary_adjacency(A: sp.csr_matrix, B: np.ndarray) -> sp.csr_matrix:
+def boundary_adjacency(A: sp.csr_matrix | StencilOperator, B: np.ndarray) -> sp.csr_matrix:
     """The boundary graph (int8): a node may enter the contact set next to one already in it."""
-    return (abs(A[B][:, B]) > 0).astype(np.int8)
+    rows = A.row_block(B) if isinstance(A, StencilOperator) else A[B]
+    return (abs(rows[:, B]) > 0).astype(np.int8)
 
 
 def initial_active(
@@ -215,6 +228,7 @@ def iterate(
     accurate = always = systems.exact
     settles = 0
     for it in range(1, max_iter + 1):
+        u = None  # the previous iterate is not needed: one vector less while the next step solves
         u = systems(free_mask(b.size, B, active), accurate)
         new_active = next_active(A, b, B, u, active, frontier)
         counters = systems.counters()
@@ -234,8 +248,14 @@ def iterate(
         history.append(row)
         extra = ", ".join(f"{k}={v:.1e}" if isinstance(v, float) else f"{k}={v}" for k, v in counters.items())
         # progress of long solves: one line per Newton step
-        log.info("iteration %d: %d active, %d changes, %s, %.2f s", it, row["active"], row["changes"], extra,
-                 row["elapsed_s"])
+        log.info(
+            "iteration %d: %d active, %d changes, %s, %.2f s",
+            it,
+            row["active"],
+            row["changes"],
+            extra,
+            row["elapsed_s"],
+        )
         if callback is not None:
             callback(dict(row))
         if np.array_equal(new_active, active):

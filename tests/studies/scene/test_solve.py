@@ -57,3 +57,26 @@ def test_the_solve_on_the_paper_mesh_does_not_build_its_triangles(tmp_path, monk
     monkeypatch.setattr(store, "friedrichs_keller", lambda *a, **k: pytest.fail("the paper mesh was built"))
     info = solve_stage(at, tmp_path / "system.npz", "multigrid", tmp_path / "s.npz", tmp_path / "s.json")
     assert info["summary"]["cascade"]["N"] == 101 // 4  # the cascade ran, on the vertices alone
+
+
+def test_the_multigrid_stage_solves_with_the_matrix_as_its_stencil(tmp_path, monkeypatch):
+    """On a grid large enough for the compiled kernels the multigrid stage holds the matrix as its
+    stencil operator (``multigrid.compact``): the archive it writes is the CSR matrix's, bit for bit."""
+    import numpy as np
+
+    import signorini.studies.scene.solve as stage
+    from signorini.solvers import certificate
+    from signorini.solvers.stencil import StencilOperator
+
+    at = SceneMesh(PROBLEM, 101, "sw_ne")
+    discretise_stage(at, tmp_path / "system.npz", tmp_path / "system.json")
+    monkeypatch.setattr(certificate, "COMPILED_MIN_UNKNOWNS", 0)
+    given, compact = [], stage.compact
+    monkeypatch.setattr(stage, "compact", lambda A: given.append(compact(A)) or given[-1])
+    stage.solve_stage(at, tmp_path / "system.npz", "multigrid", tmp_path / "stencil.npz", tmp_path / "stencil.json")
+    assert isinstance(given[0], StencilOperator)
+    monkeypatch.setattr(stage, "compact", lambda A: A)
+    stage.solve_stage(at, tmp_path / "system.npz", "multigrid", tmp_path / "csr.npz", tmp_path / "csr.json")
+    with np.load(tmp_path / "stencil.npz") as got, np.load(tmp_path / "csr.npz") as expected:
+        for name in ("u", "lam", "active", "algebraic_error"):
+            assert got[name].tobytes() == expected[name].tobytes(), name

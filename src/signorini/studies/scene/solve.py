@@ -20,6 +20,8 @@ from signorini.fem.solve import solve_discrete
 from signorini.pipeline.artifacts import save_json, save_npz
 from signorini.solvers import exact_route
 from signorini.solvers.algebraic_error import linearised_error
+from signorini.solvers.multigrid import compact
+from signorini.solvers.routes import MULTIGRID
 from signorini.studies.scene.store import SceneMesh, load_system
 
 log = logging.getLogger(__name__)
@@ -37,12 +39,14 @@ def solve_stage(
     problem, N, diagonal = at.problem, at.N, at.diagonal
     t0 = time.perf_counter()
     A, b, boundary = load_system(system_npz, N)
+    route = exact_route(solver, b.size)  # the direct route's factorisation for any route but multigrid
+    if route == MULTIGRID.name:  # a large grid's matrix as its stencil: its values not held while solving
+        A = compact(A)
     mesh = None if at.paper_mesh else at.mesh()  # the cascade interpolates onto its vertices
     disc = DiscreteProblem(problem, N, diagonal, mesh, A, b, boundary)
     t1 = time.perf_counter()
     result = solve_discrete(disc, solver=solver, **dict(solver_options or {}))
     t2 = time.perf_counter()
-    route = exact_route(solver, b.size)  # the direct route's factorisation for any route but multigrid
     algebraic = linearised_error(A, b, boundary, result.u, result.lam, result.active, route, result.hierarchy)
     result.hierarchy = None  # its memory, before the archive is written
     log.info(
