@@ -100,6 +100,8 @@ def restricted_residual(
     formed a row at a time as ``apply`` forms it and scattered as scipy's product with the
     transpose (``csc_matvec``: row by row of ``P``, in its stored order), so ``b - A x`` is never
     held."""
+    # apply's row sum written out again: called from a helper kernel, the loop over the stencil's
+    # tuple is no longer unrolled (docs/evidence/design-measurements.md#stencil-operator)
     for i in range(kind.size):
         row, total = kind[i], 0.0
         if row < 0:
