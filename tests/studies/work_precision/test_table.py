@@ -65,19 +65,27 @@ def test_the_records_of_every_job_in_one_table_sorted_by_mesh_and_configuration(
     assert list(sweeps(back)) == [("exact", "exact"), ("qp", "default"), ("qp", "1e-02"), ("qp", "1e-08")]
 
 
+def _rows(path) -> list[list[str]]:
+    with open(path, encoding="utf-8", newline="") as f:
+        return list(csv.reader(f))
+
+
 def test_the_committed_table_is_read_and_written_again_unchanged(tmp_path):
-    """Every value of ``work_precision.csv`` survives the record type; the table, measured before
-    the ``machine`` column, is written with it, empty."""
+    """Every value of ``work_precision.csv`` survives the record type, the ``machine`` column
+    included; a table measured before that column is written with it, empty."""
     committed = ROOT / "paper_figures/work_precision.csv"
-    runs = read_runs(committed)
-    write_runs(runs, tmp_path / "again.csv")
-    with open(committed, encoding="utf-8", newline="") as f:
-        before = list(csv.reader(f))
-    with open(tmp_path / "again.csv", encoding="utf-8", newline="") as f:
-        after = list(csv.reader(f))
-    machine = after[0].index("machine")
+    write_runs(read_runs(committed), tmp_path / "again.csv")
+    before = _rows(committed)
+    assert _rows(tmp_path / "again.csv") == before
+    machine = before[0].index("machine")
+    assert any(row[machine] for row in before[1:])  # the committed study records its machine
+    older = [row[:machine] + row[machine + 1 :] for row in before]
+    with open(tmp_path / "older.csv", "w", encoding="utf-8", newline="") as f:
+        csv.writer(f).writerows(older)
+    write_runs(read_runs(tmp_path / "older.csv"), tmp_path / "older_again.csv")
+    after = _rows(tmp_path / "older_again.csv")
     assert {row[machine] for row in after[1:]} == {""}
-    assert [row[:machine] + row[machine + 1 :] for row in after] == before
+    assert [row[:machine] + row[machine + 1 :] for row in after] == older
 
 
 def test_every_run_knows_its_kind():
