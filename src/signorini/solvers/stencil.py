@@ -67,14 +67,19 @@ class StencilOperator:
     def _others(self, rows: np.ndarray, data: np.ndarray | None = None) -> None:
         """Store ``rows`` (ascending) apart: their entries from ``data`` (``A``'s pattern), or,
         without it, from the rows stored apart so far and the stencil for the others."""
-        starts, ends = self._indptr[rows], self._indptr[rows + 1]
-        indptr = np.concatenate([[0], np.cumsum(ends - starts)]).astype(np.int64)
-        pos = concatenated_ranges(starts, ends)
-        values = data[pos] if data is not None else self.values_at(pos, np.repeat(rows, ends - starts))
+        indptr, pos, row_of = self._row_entries(rows)
+        values = data[pos] if data is not None else self.values_at(pos, row_of)
         self.ex_indptr, self.ex_indices, self.ex_data = indptr, self._indices[pos].copy(), values
         self.kind[self.rows] = -1
         self.rows = rows
         self.kind[rows] = np.arange(rows.size, dtype=np.int32)
+
+    def _row_entries(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """For ``rows`` in their order: the row pointers of their entries stacked, the entries'
+        positions in ``A``'s pattern and the row of each."""
+        starts, ends = self._indptr[rows], self._indptr[rows + 1]
+        indptr = np.concatenate([[0], np.cumsum(ends - starts)]).astype(np.int64)
+        return indptr, concatenated_ranges(starts, ends), np.repeat(rows, ends - starts)
 
     def _promote(self, rows: np.ndarray) -> None:
         """Store ``rows`` apart too (their values are still the stencil's)."""
@@ -139,10 +144,8 @@ class StencilOperator:
     def row_block(self, rows: np.ndarray) -> sp.csr_matrix:
         """The rows ``rows`` (in their order) as CSR: ``A[rows]``."""
         rows = np.asarray(rows, dtype=np.int64)
-        starts, ends = self._indptr[rows], self._indptr[rows + 1]
-        pos = concatenated_ranges(starts, ends)
-        indptr = np.concatenate([[0], np.cumsum(ends - starts)])
-        values = self.values_at(pos, np.repeat(rows, ends - starts))
+        indptr, pos, row_of = self._row_entries(rows)
+        values = self.values_at(pos, row_of)
         return sp.csr_matrix((values, self._indices[pos], indptr), shape=(rows.size, self.shape[1]))
 
     def _stencil(self, without_diagonal: bool = False, lower_only: bool = False) -> tuple[tuple, tuple]:
